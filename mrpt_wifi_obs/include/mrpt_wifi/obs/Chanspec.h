@@ -1,0 +1,49 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace mrpt_wifi
+{
+enum class WifiBand : uint8_t
+{
+    Band2G4 = 0,
+    Band5G = 1
+};
+
+/** A Broadcom d11ac chanspec word, decoded.
+ *
+ * Layout (DESIGN.md §4): bits 0–7 center channel, 8–10 control sideband,
+ * 11–13 bandwidth (2=20, 3=40, 4=80 MHz), 14–15 band (0 = 2.4 GHz, 3 = 5 GHz). */
+struct Chanspec
+{
+    uint16_t raw = 0;
+    uint8_t centerChannel = 0;  //!< 802.11 center channel number
+    uint16_t bandwidthMHz = 0;  //!< 20, 40 or 80
+    WifiBand band = WifiBand::Band5G;
+    uint8_t sideband = 0;  //!< control sideband index (0 = lowest 20 MHz)
+
+    /** Decodes a chanspec word; nullopt for a bandwidth, band or channel this chip can't use. */
+    static std::optional<Chanspec> decode(uint16_t word);
+    /** Builds (and encodes) a chanspec; throws std::invalid_argument for impossible combinations.
+     */
+    static Chanspec make(unsigned centerChannel, unsigned bandwidthMHz, unsigned sideband = 0);
+
+    /** FFT size of one CSI report at this bandwidth: 64 / 128 / 256. */
+    unsigned nfft() const { return 64u * (bandwidthMHz / 20u); }
+    /** Center frequency: 5000 + 5·ch MHz (5 GHz), 2407 + 5·ch MHz (2.4 GHz; ch 14 = 2484). */
+    double centerFrequencyHz() const;
+    /** Control (primary 20 MHz) channel. */
+    unsigned controlChannel() const;
+    /** `155/80` style, as `wl chanspec` and makecsiparams take it. */
+    std::string asString() const;
+    /** Parses `CH/BW` (or `CH` for 20 MHz); throws std::invalid_argument naming the text. */
+    static Chanspec fromString(const std::string& text);
+
+    bool operator==(const Chanspec& o) const { return raw == o.raw; }
+    bool operator!=(const Chanspec& o) const { return raw != o.raw; }
+};
+
+}  // namespace mrpt_wifi

@@ -1,0 +1,82 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/core/bits_math.h>
+#include <mrpt/core/exceptions.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+namespace mrpt_wifi::cli
+{
+JoinedArgv::JoinedArgv(int argc, char** argv, const std::string& flag, unsigned count)
+    : args_(argv, argv + argc)
+{
+    auto& args = args_;
+    for (size_t i = 0; i < args.size(); ++i)
+    {
+        if (args[i] != flag || i + count >= args.size()) continue;
+        std::string joined = args[i + 1];
+        for (unsigned j = 2; j <= count; ++j) joined += " " + args[i + j];
+        args.erase(args.begin() + long(i) + 2, args.begin() + long(i) + 1 + count);
+        args[i + 1] = joined;
+    }
+    for (const auto& a : args_) pointers_.push_back(a.c_str());
+}
+
+mrpt::poses::CPose3D poseFromText(const std::string& text, const std::string& what)
+{
+    std::istringstream in(text);
+    double v[6];
+    for (double& x : v)
+        if (!(in >> x))
+            throw std::invalid_argument(
+                what + ": expected six numbers 'x y z yaw pitch roll' (m, deg), got '" + text +
+                "'");
+    std::string rest;
+    if (in >> rest) throw std::invalid_argument(what + ": more than six numbers in '" + text + "'");
+    return mrpt::poses::CPose3D(
+        v[0], v[1], v[2], mrpt::DEG2RAD(v[3]), mrpt::DEG2RAD(v[4]), mrpt::DEG2RAD(v[5]));
+}
+
+Progress::Progress(std::string label, bool enabled)
+    : label_(std::move(label)),
+      enabled_(enabled && isatty(STDERR_FILENO)),
+      start_(std::chrono::steady_clock::now())
+{
+}
+
+void Progress::update(double fraction, const std::string& detail)
+{
+    if (!enabled_) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - lastDraw_ < std::chrono::milliseconds(200) && fraction < 1.0) return;
+    lastDraw_ = now;
+    std::fprintf(stderr, "\r%s %5.1f%% %s   ", label_.c_str(), 100.0 * fraction, detail.c_str());
+    std::fflush(stderr);
+}
+
+void Progress::done(const std::string& detail)
+{
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    if (enabled_) std::fprintf(stderr, "\r%s 100.0%% %s   \n", label_.c_str(), detail.c_str());
+    std::fprintf(stderr, "%s: done in %.2f s\n", label_.c_str(), secs);
+}
+
+int runMain(const std::string& program, const std::function<int()>& body)
+{
+    try
+    {
+        return body();
+    }
+    catch (const std::exception& e)
+    {
+        std::cerr << program << ": error: " << mrpt::exception_to_str(e) << std::endl;
+        return 1;
+    }
+}
+
+}  // namespace mrpt_wifi::cli

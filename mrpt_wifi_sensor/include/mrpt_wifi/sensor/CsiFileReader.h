@@ -1,0 +1,49 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/PcapIO.h>
+
+#include <functional>
+#include <string>
+
+namespace mrpt_wifi
+{
+enum class CsiFileKind
+{
+    Pcap,   //!< pcap or pcapng capture of Nexmon datagrams
+    Rawlog  //!< MRPT rawlog (gzip or plain) holding CObservationWiFiCSI
+};
+
+/** Tells a capture from a rawlog by the first bytes; throws std::runtime_error naming the
+ * file if it can't be read or is empty. */
+CsiFileKind detectCsiFileKind(const std::string& path);
+
+struct CsiFileReadOptions
+{
+    CsiFrameAssemblerOptions assembler;          //!< for captures
+    uint16_t udpPort = nexmon::kDefaultUdpPort;  //!< for captures (0: any port)
+};
+
+/** What a read went through. */
+struct CsiFileReadSummary
+{
+    CsiFileKind kind = CsiFileKind::Pcap;
+    PcapReader::Stats pcap;            //!< captures only
+    CsiFrameAssemblerStats assembler;  //!< captures only
+    uint64_t rawlogObjects = 0;  //!< rawlogs only: objects read (observations, frames, actions)
+    uint64_t frames = 0;         //!< CSI frames delivered
+    std::string asString() const;
+};
+
+/** Delivers every CSI frame of a capture or rawlog, in file order, to `onFrame`;
+ * `onProgress(fraction)` is called now and then. On a corrupt or truncated file it first
+ * delivers every frame read before the fault, then throws std::runtime_error naming the file
+ * and byte offset; `summary` (if given) is filled either way. */
+void readCsiFrames(
+    const std::string& path, const CsiFileReadOptions& options,
+    const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,
+    const std::function<void(double)>& onProgress = {}, CsiFileReadSummary* summary = nullptr);
+
+}  // namespace mrpt_wifi

@@ -1,0 +1,187 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/sensor/CsiFileReader.h>
+
+#include <array>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace mrpt_wifi
+{
+namespace
+{
+constexpr double kProgressStep = 0.01;
+
+/** Calls onProgress when the fraction has moved by at least a step. */
+class ProgressThrottle
+{
+public:
+    explicit ProgressThrottle(const std::function<void(double)>& f) : f_(f) {}
+    void update(uint64_t done, uint64_t total)
+    {
+        if (!f_ || !total) return;
+        const double fraction = std::min(1.0, double(done) / double(total));
+        if (fraction - last_ >= kProgressStep || fraction >= 1.0)
+        {
+            last_ = fraction;
+            f_(fraction);
+        }
+    }
+
+private:
+    const std::function<void(double)>& f_;
+    double last_ = -1.0;
+};
+
+void readCapture(
+    const std::string& path, const CsiFileReadOptions& options,
+    const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,
+    const std::function<void(double)>& onProgress, CsiFileReadSummary& summary)
+{
+    PcapReader reader(path, options.udpPort);
+    CsiFrameAssembler assembler(
+        options.assembler,
+        [&](CObservationWiFiCSI::Ptr&& obs)
+        {
+            ++summary.frames;
+            onFrame(std::move(obs));
+        });
+    ProgressThrottle progress(onProgress);
+    const auto finish = [&]
+    {
+        assembler.flushAll();
+        summary.pcap = reader.stats();
+        summary.assembler = assembler.stats();
+    };
+    try
+    {
+        PcapUdpDatagram d;
+        while (reader.next(d))
+        {
+            // Capture time drives the timeout, so a replay assembles exactly as live capture.
+            assembler.flushExpired(d.timestamp);
+            assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress);
+            progress.update(reader.position(), reader.fileSize());
+        }
+    }
+    catch (...)
+    {
+        finish();
+        throw;
+    }
+    finish();
+    progress.update(1, 1);
+}
+
+void readRawlog(
+    const std::string& path, const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,
+    const std::function<void(double)>& onProgress, CsiFileReadSummary& summary)
+{
+    mrpt::io::CFileGZInputStream f;
+    std::string openError;
+    if (!f.open(path, openError))
+        throw std::runtime_error("rawlog '" + path + "': cannot open: " + openError);
+    auto archive = mrpt::serialization::archiveFrom(f);
+    ProgressThrottle progress(onProgress);
+    const auto deliver = [&](const mrpt::obs::CObservation::Ptr& o)
+    {
+        if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+        {
+            ++summary.frames;
+            onFrame(std::move(csi));
+        }
+    };
+    for (;;)
+    {
+        const uint64_t offset = f.getPosition();
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            archive >> obj;
+        }
+        catch (const mrpt::serialization::CExceptionEOF&)
+        {
+            break;
+        }
+        catch (const std::exception& e)
+        {
+            // MRPT reports a clean end of a gzip stream as EOF, anything else is corruption.
+            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
+            throw std::runtime_error(
+                "rawlog '" + path + "': unreadable object #" +
+                std::to_string(summary.rawlogObjects + 1) + " at compressed byte offset " +
+                std::to_string(offset) + ": " + mrpt::exception_to_str(e));
+        }
+        ++summary.rawlogObjects;
+        if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
+            for (const auto& o : *sf) deliver(o);
+        else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj))
+            deliver(o);
+        progress.update(f.getPosition(), f.getTotalBytesCount());
+    }
+    progress.update(1, 1);
+}
+}  // namespace
+
+CsiFileKind detectCsiFileKind(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot open '" + path + "'");
+    std::array<uint8_t, 4> m{};
+    in.read(reinterpret_cast<char*>(m.data()), 4);
+    if (in.gcount() < 4)
+        throw std::runtime_error("'" + path + "' is empty or shorter than 4 bytes");
+    const uint32_t magic =
+        uint32_t(m[0]) | uint32_t(m[1]) << 8 | uint32_t(m[2]) << 16 | uint32_t(m[3]) << 24;
+    switch (magic)
+    {
+        case 0xA1B2C3D4:  // pcap, µs
+        case 0xD4C3B2A1:  // pcap, µs, other byte order
+        case 0xA1B23C4D:  // pcap, ns
+        case 0x4D3CB2A1:
+        case 0x0A0D0D0A:  // pcapng section header block
+            return CsiFileKind::Pcap;
+        default:
+            return CsiFileKind::Rawlog;
+    }
+}
+
+std::string CsiFileReadSummary::asString() const
+{
+    std::ostringstream o;
+    if (kind == CsiFileKind::Pcap)
+    {
+        o << "capture: " << pcap.packets << " packets, " << pcap.udp << " CSI-port datagrams";
+        const uint64_t skipped =
+            pcap.skippedNotIp + pcap.skippedNotUdp + pcap.skippedOtherPort + pcap.skippedTruncated;
+        if (skipped)
+            o << ", skipped " << skipped << " (not IP " << pcap.skippedNotIp << ", not UDP "
+              << pcap.skippedNotUdp << ", other port " << pcap.skippedOtherPort << ", truncated "
+              << pcap.skippedTruncated << ")";
+        o << "\nassembler: " << assembler.asString();
+    }
+    else
+        o << "rawlog: " << rawlogObjects << " objects";
+    o << "\nCSI frames: " << frames;
+    return o.str();
+}
+
+void readCsiFrames(
+    const std::string& path, const CsiFileReadOptions& options,
+    const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,
+    const std::function<void(double)>& onProgress, CsiFileReadSummary* summaryOut)
+{
+    CsiFileReadSummary local;
+    CsiFileReadSummary& summary = summaryOut ? *summaryOut : local;
+    summary = CsiFileReadSummary{};
+    summary.kind = detectCsiFileKind(path);
+    if (summary.kind == CsiFileKind::Pcap)
+        readCapture(path, options, onFrame, onProgress, summary);
+    else
+        readRawlog(path, onFrame, onProgress, summary);
+}
+
+}  // namespace mrpt_wifi

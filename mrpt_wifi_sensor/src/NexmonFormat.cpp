@@ -1,0 +1,311 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt_wifi/sensor/NexmonFormat.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+namespace mrpt_wifi::nexmon
+{
+namespace
+{
+inline uint16_t readLE16(const uint8_t* p)
+{
+    return uint16_t(p[0] | (p[1] << 8));
+}
+inline uint32_t readLE32(const uint8_t* p)
+{
+    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
+}
+inline void writeLE16(uint8_t* p, uint16_t v)
+{
+    p[0] = uint8_t(v);
+    p[1] = uint8_t(v >> 8);
+}
+inline void writeLE32(uint8_t* p, uint32_t v)
+{
+    for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
+}
+
+/** 2^e for the 6-bit two's-complement exponent field, indexed by the raw field. */
+const std::array<float, 64> kExponentScale = []
+{
+    std::array<float, 64> t{};
+    for (int raw = 0; raw < 64; ++raw) t[raw] = std::ldexp(1.0f, raw >= 32 ? raw - 64 : raw);
+    return t;
+}();
+
+constexpr uint32_t kMantissaMask = 0x7FF;
+constexpr int kImagShift = 6, kImagSign = 17, kRealShift = 18, kRealSign = 29;
+constexpr int kMaxMantissa = 2047, kMinExponent = -32, kMaxExponent = 31;
+
+bool isTwoByteMagic(const uint8_t* p)
+{
+    return p[0] == 0x11 && p[1] == 0x11;
+}
+bool isFourByteMagic(const uint8_t* p)
+{
+    return isTwoByteMagic(p) && p[2] == 0x11 && p[3] == 0x11;
+}
+}  // namespace
+
+const char* toString(RejectReason r)
+{
+    switch (r)
+    {
+        case RejectReason::TooShort:
+            return "too short";
+        case RejectReason::BadMagic:
+            return "wrong magic";
+        case RejectReason::UnknownChip:
+            return "unknown chip";
+        case RejectReason::BadChanspec:
+            return "bad chanspec";
+        case RejectReason::SizeMismatch:
+            return "size not matching bandwidth";
+        case RejectReason::BadCoreStream:
+            return "impossible core/stream";
+        case RejectReason::Count:
+            break;
+    }
+    return "?";
+}
+
+const char* toString(FormatHint f)
+{
+    switch (f)
+    {
+        case FormatHint::Auto:
+            return "auto";
+        case FormatHint::Nexmon:
+            return "nexmon";
+        case FormatHint::NexmonLegacy:
+            return "nexmon-legacy";
+        case FormatHint::UbiLocate:
+            return "ubilocate";
+    }
+    return "?";
+}
+
+FormatHint formatHintFromString(const std::string& s)
+{
+    for (auto f :
+         {FormatHint::Auto, FormatHint::Nexmon, FormatHint::NexmonLegacy, FormatHint::UbiLocate})
+        if (s == toString(f)) return f;
+    throw std::invalid_argument(
+        "unknown Nexmon format '" + s + "' (expected auto, nexmon, nexmon-legacy or ubilocate)");
+}
+
+size_t datagramSize(NexmonHeaderVariant v, unsigned nfft)
+{
+    return kHeaderBytes + 4 * size_t(nfft) +
+           (v == NexmonHeaderVariant::UbiLocate ? kUbiLocateTrailerBytes : 0);
+}
+
+bool parseHeader(
+    const uint8_t* data, size_t len, FormatHint hint, DatagramHeader& h, RejectReason& why)
+{
+    if (len < kHeaderBytes)
+    {
+        why = RejectReason::TooShort;
+        return false;
+    }
+    if (!isTwoByteMagic(data))
+    {
+        why = RejectReason::BadMagic;
+        return false;
+    }
+    const auto chanspec = Chanspec::decode(readLE16(data + 14));
+    if (!chanspec)
+    {
+        why = RejectReason::BadChanspec;
+        return false;
+    }
+    const unsigned nfft = chanspec->nfft();
+
+    // All three variants share offsets 4..17; they differ in bytes 0..3 and in the trailer.
+    NexmonHeaderVariant variant;
+    switch (hint)
+    {
+        case FormatHint::Nexmon:
+            variant = NexmonHeaderVariant::Nexmon;
+            break;
+        case FormatHint::NexmonLegacy:
+            variant = NexmonHeaderVariant::NexmonLegacy;
+            break;
+        case FormatHint::UbiLocate:
+            variant = NexmonHeaderVariant::UbiLocate;
+            break;
+        case FormatHint::Auto:
+        default:
+            if (isFourByteMagic(data))
+                variant = NexmonHeaderVariant::NexmonLegacy;
+            else if (len == datagramSize(NexmonHeaderVariant::UbiLocate, nfft))
+                variant = NexmonHeaderVariant::UbiLocate;
+            else
+                variant = NexmonHeaderVariant::Nexmon;
+            break;
+    }
+    if (variant == NexmonHeaderVariant::NexmonLegacy && !isFourByteMagic(data))
+    {
+        why = RejectReason::BadMagic;
+        return false;
+    }
+    if (len != datagramSize(variant, nfft))
+    {
+        why = RejectReason::SizeMismatch;
+        return false;
+    }
+
+    h = DatagramHeader{};
+    h.variant = variant;
+    h.chanspec = *chanspec;
+    std::memcpy(h.transmitter.bytes.data(), data + 4, 6);
+    h.sequenceControl = readLE16(data + 10);
+    const uint16_t csiconf = readLE16(data + 12);
+    const uint16_t word16 = readLE16(data + 16);
+    if (variant == NexmonHeaderVariant::UbiLocate)
+    {
+        h.coreMask = data[2];
+        h.streamMask = data[3];
+        h.core = uint8_t((csiconf & 0xFF) >> 2);
+        h.stream = uint8_t(csiconf & 0x3);
+        h.firmwareCounter = word16;
+    }
+    else
+    {
+        if (word16 != kChip4366c0)
+        {
+            why = RejectReason::UnknownChip;
+            return false;
+        }
+        h.chipId = word16;
+        // 4366c0: core in bits 8–10, stream in bits 11–13 (not the low bits other chips use).
+        h.core = uint8_t((csiconf >> 8) & 0x7);
+        h.stream = uint8_t((csiconf >> 11) & 0x7);
+        if (variant == NexmonHeaderVariant::Nexmon)
+        {
+            h.rssi_dBm = int8_t(data[2]);
+            h.frameControl = data[3];
+        }
+    }
+    const bool coreOk = h.core < kMaxCores && (!h.coreMask || ((h.coreMask >> h.core) & 1));
+    const bool streamOk =
+        h.stream < kMaxStreams && (!h.streamMask || ((h.streamMask >> h.stream) & 1));
+    if (!coreOk || !streamOk)
+    {
+        why = RejectReason::BadCoreStream;
+        return false;
+    }
+    return true;
+}
+
+std::complex<float> unpackWord(uint32_t w)
+{
+    const float scale = kExponentScale[w & 0x3F];
+    const float im = float((w >> kImagShift) & kMantissaMask);
+    const float re = float((w >> kRealShift) & kMantissaMask);
+    return {((w >> kRealSign) & 1u ? -re : re) * scale, ((w >> kImagSign) & 1u ? -im : im) * scale};
+}
+
+uint32_t packWord(std::complex<float> v)
+{
+    const float largest = std::max(std::abs(v.real()), std::abs(v.imag()));
+    if (!(largest > 0.0f) || !std::isfinite(largest)) return 0;
+    // Smallest exponent whose mantissas fit in 11 bits: most precision for this value.
+    int e = std::ilogb(largest) - 10;
+    if (std::lround(std::ldexp(largest, -e)) > kMaxMantissa) ++e;
+    e = std::clamp(e, kMinExponent, kMaxExponent);
+    const auto mantissa = [e](float x)
+    { return uint32_t(std::min<long>(std::lround(std::ldexp(std::abs(x), -e)), kMaxMantissa)); };
+    const uint32_t mr = mantissa(v.real()), mi = mantissa(v.imag());
+    uint32_t w = uint32_t(e) & 0x3F;
+    w |= mi << kImagShift;
+    w |= mr << kRealShift;
+    if (v.imag() < 0 && mi) w |= 1u << kImagSign;
+    if (v.real() < 0 && mr) w |= 1u << kRealSign;
+    return w;
+}
+
+void decodeWords(const uint8_t* words, unsigned nfft, std::complex<float>* out)
+{
+    const unsigned half = nfft / 2;
+    for (unsigned i = 0; i < nfft; ++i)
+        out[(i + half) & (nfft - 1)] = unpackWord(readLE32(words + 4 * i));
+}
+
+void encodeDatagram(
+    const DatagramHeader& h, const std::complex<float>* subcarrierOrder, std::vector<uint8_t>& out)
+{
+    const unsigned nfft = h.nfft();
+    out.assign(datagramSize(h.variant, nfft), 0);
+    uint8_t* p = out.data();
+    p[0] = p[1] = 0x11;
+    uint16_t csiconf = 0, word16 = 0;
+    switch (h.variant)
+    {
+        case NexmonHeaderVariant::Nexmon:
+            p[2] = uint8_t(h.rssi_dBm);
+            p[3] = h.frameControl;
+            csiconf = uint16_t((h.core & 7) << 8 | (h.stream & 7) << 11);
+            word16 = h.chipId;
+            break;
+        case NexmonHeaderVariant::NexmonLegacy:
+            p[2] = p[3] = 0x11;
+            csiconf = uint16_t((h.core & 7) << 8 | (h.stream & 7) << 11);
+            word16 = h.chipId;
+            break;
+        case NexmonHeaderVariant::UbiLocate:
+            p[2] = h.coreMask;
+            p[3] = h.streamMask;
+            csiconf = uint16_t((h.core << 2) | (h.stream & 3));
+            word16 = h.firmwareCounter;
+            break;
+    }
+    std::memcpy(p + 4, h.transmitter.bytes.data(), 6);
+    writeLE16(p + 10, h.sequenceControl);
+    writeLE16(p + 12, csiconf);
+    writeLE16(p + 14, h.chanspec.raw);
+    writeLE16(p + 16, word16);
+    const unsigned half = nfft / 2;
+    for (unsigned i = 0; i < nfft; ++i)
+        writeLE32(p + kHeaderBytes + 4 * i, packWord(subcarrierOrder[(i + half) & (nfft - 1)]));
+}
+
+DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned rx)
+{
+    DatagramHeader h;
+    h.variant = obs.headerVariant;
+    h.rssi_dBm = obs.rssi_dBm;
+    h.frameControl = obs.frameControl;
+    h.transmitter = obs.transmitter;
+    h.sequenceControl = uint16_t(obs.sequenceNumber << 4 | (obs.fragmentNumber & 0xF));
+    h.core = uint8_t(rx);
+    h.stream = uint8_t(tx);
+    h.chanspec = obs.chanspec;
+    h.chipId = obs.headerVariant == NexmonHeaderVariant::UbiLocate ? 0 : kChip4366c0;
+    h.firmwareCounter = obs.firmwareCounter;
+    if (obs.headerVariant == NexmonHeaderVariant::UbiLocate)
+    {
+        h.coreMask = uint8_t((1u << obs.nRx) - 1);
+        h.streamMask = uint8_t((1u << obs.nTx) - 1);
+    }
+    return h;
+}
+
+std::vector<std::vector<uint8_t>> encodeFrame(const CObservationWiFiCSI& obs)
+{
+    std::vector<std::vector<uint8_t>> datagrams;
+    for (unsigned rx = 0; rx < obs.nRx; ++rx)
+        for (unsigned tx = 0; tx < obs.nTx; ++tx)
+        {
+            if (!obs.isPresent(tx, rx)) continue;
+            datagrams.emplace_back();
+            encodeDatagram(headerFor(obs, tx, rx), obs.pair(tx, rx), datagrams.back());
+        }
+    return datagrams;
+}
+
+}  // namespace mrpt_wifi::nexmon

@@ -1,0 +1,157 @@
+#include <gtest/gtest.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/Subcarriers.h>
+
+#include <cmath>
+#include <sstream>
+
+using namespace mrpt_wifi;
+
+namespace
+{
+CObservationWiFiCSI::Ptr makeFilledObservation()
+{
+    auto o = CObservationWiFiCSI::Create();
+    o->timestamp = mrpt::Clock::fromDouble(1487031139.535287);
+    o->sensorLabel = "CSI_FRONT";
+    o->sensorPose = mrpt::poses::CPose3D(0.1, -0.2, 0.3, 0.4, -0.05, 0.06);
+    o->transmitter = MacAddress::fromString("00:12:34:56:78:9b");
+    o->rssi_dBm = -57;
+    o->sequenceNumber = 4095;
+    o->fragmentNumber = 3;
+    o->frameControl = 0x88;
+    o->chanspec = Chanspec::make(155, 80, 2);
+    o->chipId = 0x006a;
+    o->firmwareCounter = 7;
+    o->headerVariant = NexmonHeaderVariant::Nexmon;
+    o->routerAddress = "10.10.10.10";
+    o->resize(2, 4, 256);
+    for (unsigned tx = 0; tx < 2; ++tx)
+        for (unsigned rx = 0; rx < 4; ++rx)
+        {
+            if (tx == 1 && rx == 2) continue;  // one pair missing
+            o->setPresent(tx, rx);
+            for (unsigned b = 0; b < 256; ++b)
+                o->at(tx, rx, b) = {
+                    float(tx + 1) * std::cos(0.05f * b + rx), -std::sin(0.03f * b) * 0.5f};
+        }
+    o->maskedBins = {128, 129};
+    return o;
+}
+}  // namespace
+
+TEST(CObservationWiFiCSI, SerializationRoundTripKeepsEveryField)
+{
+    const auto a = makeFilledObservation();
+    mrpt::io::CMemoryStream buf;
+    auto out = mrpt::serialization::archiveFrom(buf);
+    out << *a;
+    buf.Seek(0);
+    auto in = mrpt::serialization::archiveFrom(buf);
+    // Read back through MRPT's class registry, as rawlog-edit does.
+    const auto obj = in.ReadObject();
+    const auto b = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj);
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->timestamp, a->timestamp);
+    EXPECT_EQ(b->sensorLabel, a->sensorLabel);
+    EXPECT_EQ(b->sensorPose, a->sensorPose);
+    EXPECT_EQ(b->transmitter, a->transmitter);
+    EXPECT_EQ(b->rssi_dBm, a->rssi_dBm);
+    EXPECT_EQ(b->sequenceNumber, a->sequenceNumber);
+    EXPECT_EQ(b->fragmentNumber, a->fragmentNumber);
+    EXPECT_EQ(b->frameControl, a->frameControl);
+    EXPECT_EQ(b->chanspec, a->chanspec);
+    EXPECT_EQ(b->chanspec.sideband, 2);
+    EXPECT_EQ(b->chipId, a->chipId);
+    EXPECT_EQ(b->firmwareCounter, a->firmwareCounter);
+    EXPECT_EQ(b->headerVariant, a->headerVariant);
+    EXPECT_EQ(b->routerAddress, a->routerAddress);
+    EXPECT_EQ(b->nRx, 4);
+    EXPECT_EQ(b->nTx, 2);
+    EXPECT_EQ(b->presentMask, a->presentMask);
+    EXPECT_EQ(b->presentPairs(), 7u);
+    EXPECT_FALSE(b->isPresent(1, 2));
+    EXPECT_EQ(b->maskedBins, a->maskedBins);
+    EXPECT_EQ(b->csi, a->csi);
+}
+
+TEST(CObservationWiFiCSI, CorruptStoredShapeIsAnError)
+{
+    auto a = makeFilledObservation();
+    a->nRx = 3;  // no longer matches the CSI size
+    mrpt::io::CMemoryStream buf;
+    auto out = mrpt::serialization::archiveFrom(buf);
+    out << *a;
+    buf.Seek(0);
+    auto in = mrpt::serialization::archiveFrom(buf);
+    EXPECT_THROW(in.ReadObject(), std::exception);
+}
+
+TEST(CObservationWiFiCSI, DataSubcarrierAccessors)
+{
+    const auto o = makeFilledObservation();
+    const auto h = o->dataSubcarrierCsi(0, 1);
+    ASSERT_EQ(h.size(), 234u);
+    EXPECT_EQ(h.front(), o->at(0, 1, subcarrierToBin(-122, 256)));
+    EXPECT_EQ(h.back(), o->at(0, 1, subcarrierToBin(122, 256)));
+    const auto f = o->dataSubcarrierFrequencies();
+    ASSERT_EQ(f.size(), 234u);
+    EXPECT_DOUBLE_EQ(f.front(), 5775e6 - 122 * 312.5e3);
+}
+
+TEST(CObservationWiFiCSI, DescriptionNamesWhatAPersonNeeds)
+{
+    const auto o = makeFilledObservation();
+    std::ostringstream s;
+    o->getDescriptionAsText(s);
+    const std::string d = s.str();
+    for (const char* expected :
+         {"00:12:34:56:78:9b", "-57 dBm", "channel 155 / 80 MHz", "5775.0 MHz", "0x006a / nexmon",
+          "2 tx x 4 rx x 256 bins", "7/8 pairs present", "tx 1 rx 2: MISSING", "tx 0 rx 0:"})
+        EXPECT_NE(d.find(expected), std::string::npos) << "missing '" << expected << "' in\n" << d;
+}
+
+TEST(CObservationWiFiCSI, DescriptionSaysWhenTheHeaderHasNoRssi)
+{
+    auto o = makeFilledObservation();
+    o->headerVariant = NexmonHeaderVariant::UbiLocate;
+    std::ostringstream s;
+    o->getDescriptionAsText(s);
+    EXPECT_NE(s.str().find("not reported by the ubilocate header"), std::string::npos) << s.str();
+    EXPECT_NE(s.str().find("firmware counter 7"), std::string::npos) << s.str();
+}
+
+TEST(CObservationWiFiCSI, DescriptionPhaseSlopeGivesThePathDelay)
+{
+    // A single path of delay tau: H(k) = exp(-j 2 pi k df tau); the description reports tau.
+    auto o = CObservationWiFiCSI::Create();
+    o->chanspec = Chanspec::make(42, 80);
+    o->resize(1, 1, 256);
+    o->setPresent(0, 0);
+    const double tau = 50e-9;
+    for (int k = -128; k < 128; ++k)
+        o->at(0, 0, subcarrierToBin(k, 256)) =
+            std::polar(1.0f, float(-2 * M_PI * k * kSubcarrierSpacingHz * tau));
+    std::ostringstream s;
+    o->getDescriptionAsText(s);
+    EXPECT_NE(s.str().find("(50.0 ns)"), std::string::npos) << s.str();
+}
+
+TEST(CObservationWiFiCSI, ExportTxtRowHasOneColumnPerValue)
+{
+    const auto o = makeFilledObservation();
+    ASSERT_TRUE(o->exportTxtSupported());
+    std::istringstream row(o->exportTxtDataRow());
+    std::vector<std::string> cols;
+    for (std::string c; row >> c;) cols.push_back(c);
+    ASSERT_EQ(cols.size(), 9u + 2u * 4u * 234u * 2u);
+    EXPECT_EQ(cols[0], "4095");
+    EXPECT_EQ(cols[1], "-57");
+    EXPECT_EQ(cols[2], "155");
+    // The missing pair (tx 1, rx 2) exports as NaN.
+    const size_t missingStart = 9 + (1 * 4 + 2) * 234 * 2;
+    EXPECT_EQ(cols[missingStart], "NaN");
+    EXPECT_NE(cols[9], "NaN");
+}
