@@ -2,6 +2,7 @@
 #include <mrpt_wifi/obs/Chanspec.h>
 
 #include <stdexcept>
+#include <vector>
 
 namespace mrpt_wifi
 {
@@ -28,6 +29,17 @@ unsigned bandwidthCode(unsigned mhz)
 unsigned sidebandCount(unsigned mhz)
 {
     return mhz / 20;
+}
+
+/** First 20 MHz channel of every 40 / 80 MHz block of the 5 GHz plan (802.11ac, incl. the
+ * 165–177 extension). */
+const std::vector<unsigned>& blockStarts(unsigned mhz)
+{
+    static const std::vector<unsigned> starts40 = {36,  44,  52,  60,  100, 108, 116,
+                                                   124, 132, 140, 149, 157, 165, 173};
+    static const std::vector<unsigned> starts80 = {36, 52, 100, 116, 132, 149, 165};
+    static const std::vector<unsigned> none;
+    return mhz == 40 ? starts40 : mhz == 80 ? starts80 : none;
 }
 
 bool channelFitsBand(unsigned ch, WifiBand band)
@@ -101,6 +113,25 @@ unsigned Chanspec::controlChannel() const
     return centerChannel - 2 * (n - 1) + 4 * sideband;
 }
 
+std::optional<Chanspec> Chanspec::fromControlChannel(unsigned control, unsigned mhz)
+{
+    if (mhz == 20)
+    {
+        if (control == 0 || control > 196) return std::nullopt;
+        return make(control, 20);
+    }
+    const unsigned width = mhz / 20;
+    for (unsigned start : blockStarts(mhz))
+        if (control >= start && control < start + 4 * width && (control - start) % 4 == 0)
+            return make(start + 2 * (width - 1), mhz, (control - start) / 4);
+    return std::nullopt;
+}
+
+std::string Chanspec::asBroadcomString() const
+{
+    return std::to_string(controlChannel()) + "/" + std::to_string(bandwidthMHz);
+}
+
 std::string Chanspec::asString() const
 {
     return std::to_string(centerChannel) + "/" + std::to_string(bandwidthMHz);
@@ -122,6 +153,9 @@ Chanspec Chanspec::fromString(const std::string& text)
             bw = std::stoul(bwText, &used);
             if (used != bwText.size()) throw std::invalid_argument("");
         }
+        if (bw != 20 && ch > 14)
+            if (auto fromControl = fromControlChannel(unsigned(ch), unsigned(bw)))
+                return *fromControl;
         return make(unsigned(ch), unsigned(bw));
     }
     catch (const std::invalid_argument& e)

@@ -7,6 +7,10 @@
 #include <cstring>
 #include <stdexcept>
 
+#if __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "the Nexmon word decoder assumes a little-endian host"
+#endif
+
 namespace mrpt_wifi::nexmon
 {
 namespace
@@ -14,10 +18,6 @@ namespace
 inline uint16_t readLE16(const uint8_t* p)
 {
     return uint16_t(p[0] | (p[1] << 8));
-}
-inline uint32_t readLE32(const uint8_t* p)
-{
-    return uint32_t(p[0]) | (uint32_t(p[1]) << 8) | (uint32_t(p[2]) << 16) | (uint32_t(p[3]) << 24);
 }
 inline void writeLE16(uint8_t* p, uint16_t v)
 {
@@ -28,14 +28,6 @@ inline void writeLE32(uint8_t* p, uint32_t v)
 {
     for (int i = 0; i < 4; ++i) p[i] = uint8_t(v >> (8 * i));
 }
-
-/** 2^e for the 6-bit two's-complement exponent field, indexed by the raw field. */
-const std::array<float, 64> kExponentScale = []
-{
-    std::array<float, 64> t{};
-    for (int raw = 0; raw < 64; ++raw) t[raw] = std::ldexp(1.0f, raw >= 32 ? raw - 64 : raw);
-    return t;
-}();
 
 constexpr uint32_t kMantissaMask = 0x7FF;
 constexpr int kImagShift = 6, kImagSign = 17, kRealShift = 18, kRealSign = 29;
@@ -202,14 +194,6 @@ bool parseHeader(
     return true;
 }
 
-std::complex<float> unpackWord(uint32_t w)
-{
-    const float scale = kExponentScale[w & 0x3F];
-    const float im = float((w >> kImagShift) & kMantissaMask);
-    const float re = float((w >> kRealShift) & kMantissaMask);
-    return {((w >> kRealSign) & 1u ? -re : re) * scale, ((w >> kImagSign) & 1u ? -im : im) * scale};
-}
-
 uint32_t packWord(std::complex<float> v)
 {
     const float largest = std::max(std::abs(v.real()), std::abs(v.imag()));
@@ -229,11 +213,46 @@ uint32_t packWord(std::complex<float> v)
     return w;
 }
 
+namespace
+{
+/** Decodes n consecutive words into interleaved re/im floats. Branch-free and table-free
+ * (the 2^e scale is built from the exponent bits) so the compiler vectorises it. */
+inline void decodeRun(const uint8_t* words, unsigned n, float* reIm)
+{
+    for (unsigned i = 0; i < n; ++i)
+    {
+        uint32_t w;
+        std::memcpy(&w, words + 4 * i, 4);                // little-endian host (x86-64, aarch64)
+        const int32_t exponent = int32_t(w << 26) >> 26;  // sign-extend the 6-bit field
+        const uint32_t scaleBits = uint32_t(exponent + 127) << 23;
+        float scale;
+        std::memcpy(&scale, &scaleBits, 4);
+        const int32_t mi = int32_t((w >> kImagShift) & kMantissaMask);
+        const int32_t mr = int32_t((w >> kRealShift) & kMantissaMask);
+        const int32_t si = -int32_t((w >> kImagSign) & 1u), sr = -int32_t((w >> kRealSign) & 1u);
+        reIm[2 * i] = float((mr ^ sr) - sr) * scale;
+        reIm[2 * i + 1] = float((mi ^ si) - si) * scale;
+    }
+}
+}  // namespace
+
+std::complex<float> unpackWord(uint32_t w)
+{
+    uint8_t bytes[4];
+    std::memcpy(bytes, &w, 4);
+    float reIm[2];
+    decodeRun(bytes, 1, reIm);
+    return {reIm[0], reIm[1]};
+}
+
 void decodeWords(const uint8_t* words, unsigned nfft, std::complex<float>* out)
 {
+    static_assert(sizeof(std::complex<float>) == 2 * sizeof(float));
+    // fftshift: raw words [0, N/2) are k = 0..N/2-1 (bins N/2..N-1), [N/2, N) are k < 0.
     const unsigned half = nfft / 2;
-    for (unsigned i = 0; i < nfft; ++i)
-        out[(i + half) & (nfft - 1)] = unpackWord(readLE32(words + 4 * i));
+    auto* reIm = reinterpret_cast<float*>(out);
+    decodeRun(words, half, reIm + 2 * half);
+    decodeRun(words + 4 * half, half, reIm);
 }
 
 void encodeDatagram(

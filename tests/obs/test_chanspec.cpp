@@ -69,3 +69,28 @@ TEST(Chanspec, RejectsWhatTheChipCannotUse)
         EXPECT_NE(std::string(e.what()).find("155/70"), std::string::npos) << e.what();
     }
 }
+
+TEST(Chanspec, BroadcomControlChannelNotation)
+{
+    // wl / makecsiparams name a wide channel by its control channel: 157/80 is center 155.
+    const auto cs = Chanspec::fromString("157/80");
+    EXPECT_EQ(cs.centerChannel, 155);
+    EXPECT_EQ(cs.sideband, 2);
+    EXPECT_EQ(cs.raw, 0xe29b);  // the real captures' chanspec
+    EXPECT_EQ(cs.asBroadcomString(), "157/80");
+    EXPECT_EQ(cs.asString(), "155/80");
+    EXPECT_EQ(Chanspec::fromString("36/80").centerChannel, 42);
+    EXPECT_EQ(Chanspec::fromString("36/80").sideband, 0);
+    EXPECT_EQ(Chanspec::fromString("48/80").sideband, 3);
+    EXPECT_EQ(Chanspec::fromString("42/80").centerChannel, 42);  // center notation still works
+    EXPECT_EQ(Chanspec::fromString("153/40").centerChannel, 151);
+    EXPECT_EQ(Chanspec::fromString("153/40").sideband, 1);
+    EXPECT_EQ(Chanspec::fromString("106/80").raw, 0xe06a);
+    EXPECT_FALSE(Chanspec::fromControlChannel(150, 80));
+    for (unsigned c : {36u, 40u, 100u, 124u, 149u, 161u})
+    {
+        const auto back =
+            Chanspec::fromString(Chanspec::fromControlChannel(c, 80)->asBroadcomString());
+        EXPECT_EQ(back.controlChannel(), c);
+    }
+}

@@ -37,10 +37,19 @@ struct Chanspec
     double centerFrequencyHz() const;
     /** Control (primary 20 MHz) channel. */
     unsigned controlChannel() const;
-    /** `155/80` style, as `wl chanspec` and makecsiparams take it. */
+    /** `155/80`: center channel / bandwidth, this project's convention (DESIGN.md §6). */
     std::string asString() const;
-    /** Parses `CH/BW` (or `CH` for 20 MHz); throws std::invalid_argument naming the text. */
+    /** `157/80`: control channel / bandwidth, the notation of Broadcom's `wl chanspec` and
+     * `makecsiparams -c` (the same chanspec as center 155/80, sideband 2). */
+    std::string asBroadcomString() const;
+    /** Parses `CH/BW` (or `CH` for 20 MHz). At 40/80 MHz in the 5 GHz band CH may be the
+     * center channel (155/80) or a control channel (157/80): the two sets don't overlap.
+     * Throws std::invalid_argument naming the text. */
     static Chanspec fromString(const std::string& text);
+    /** The 40/80 MHz chanspec whose 20 MHz sub-channel `controlChannel` is (5 GHz plan);
+     *  nullopt if that channel starts no such block. 20 MHz: the channel itself. */
+    static std::optional<Chanspec> fromControlChannel(
+        unsigned controlChannel, unsigned bandwidthMHz);
 
     bool operator==(const Chanspec& o) const { return raw == o.raw; }
     bool operator!=(const Chanspec& o) const { return raw != o.raw; }

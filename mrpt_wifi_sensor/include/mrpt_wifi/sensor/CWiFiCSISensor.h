@@ -1,0 +1,129 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/hwdrivers/CGenericSensor.h>
+#include <mrpt/system/COutputLogger.h>
+#include <mrpt_wifi/sensor/AccessPointSelector.h>
+#include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/NexmonRouterControl.h>
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+namespace mrpt_wifi
+{
+class UdpCsiReceiver;
+class PcapReader;
+
+/** Captures WiFi CSI from an Asus RT-AC86U running Nexmon CSI firmware, as
+ * mrpt_wifi::CObservationWiFiCSI, inside `rawlog-grabber` or any MRPT program.
+ *
+ * Data path: Nexmon datagrams over UDP (or replayed from a pcap at recorded pace) → header
+ * checks → frame assembly → router-address / MAC / RSSI filters → observations stamped with
+ * the kernel arrival time of their first datagram.
+ * Control path (optional): the router is configured over ssh (firmware module, chanspec,
+ * monitor mode, makecsiparams + nexutil), scanned for access points, switched between
+ * channels, and put in transmitter mode — in a worker thread, so capture never stalls.
+ *
+ * See the .ini files in share/rawlog-grabber/ for every configuration key. Unknown keys are an
+ * error. Registered as `driver = CWiFiCSISensor` by libmrpt_wifi_sensor.so. */
+class CWiFiCSISensor : public mrpt::hwdrivers::CGenericSensor, public mrpt::system::COutputLogger
+{
+    DEFINE_GENERIC_SENSOR(CWiFiCSISensor)
+
+public:
+    CWiFiCSISensor();
+    ~CWiFiCSISensor() override;
+
+    void initialize() override;
+    void doProcess() override;
+
+    /** Asks for a retune (asynchronous). The downtime, from this call to the first frame on
+     * the new channel, is measured and logged. */
+    void requestChannel(const Chanspec& cs, const std::string& reason);
+    /** Asks for an access-point scan now (asynchronous); the result is recorded. */
+    void requestScan();
+
+    struct Counters
+    {
+        uint64_t datagrams = 0;         //!< received from the socket / pcap
+        uint64_t fromOtherSources = 0;  //!< dropped by the router-address filter
+        uint64_t framesDelivered = 0;   //!< appended as observations
+        uint64_t framesFilteredMac = 0;
+        uint64_t framesFilteredRssi = 0;
+        uint64_t kernelDrops = 0;  //!< lost in the socket buffer
+        uint64_t scans = 0;
+        uint64_t channelSwitches = 0;
+        uint64_t controlErrors = 0;
+        CsiFrameAssemblerStats assembler;
+    };
+    Counters counters() const;
+    /** Why the sensor is in the error state (empty when it isn't). */
+    std::string lastError() const;
+    /** The channel the router was last configured to (nullopt before the first success). */
+    std::optional<Chanspec> configuredChannel() const;
+    /** Downtime of the last completed channel switch [s]. */
+    std::optional<double> lastSwitchDowntime() const;
+
+protected:
+    void loadConfig_sensorSpecific(
+        const mrpt::config::CConfigFileBase& config, const std::string& section) override;
+
+private:
+    enum class Source
+    {
+        Udp,
+        Pcap
+    };
+    struct Settings;
+    std::unique_ptr<Settings> settings_;
+
+    // Data path
+    std::unique_ptr<UdpCsiReceiver> receiver_;
+    std::unique_ptr<PcapReader> replay_;
+    std::unique_ptr<CsiFrameAssembler> assembler_;
+    mrpt::Clock::time_point replayStartWall_, replayStartCapture_;
+    bool replayHasPending_ = false;
+    std::vector<uint8_t> replayPending_;
+    std::string replayPendingSource_;
+    mrpt::Clock::time_point replayPendingTime_;
+    bool replayFinished_ = false;
+    void onDatagram(
+        const uint8_t* data, size_t len, mrpt::Clock::time_point t, const std::string& src);
+    void onFrame(CObservationWiFiCSI::Ptr&& frame);
+    void drainReplay();
+
+    // Control path: one worker thread runs router jobs in order; results come back as events.
+    std::unique_ptr<NexmonRouterControl> router_;
+    std::thread worker_;
+    std::deque<std::function<void()>> jobs_;
+    std::deque<std::function<void()>> events_;  //!< run on the sensor thread
+    bool stopWorker_ = false;
+    bool scanQueued_ = false;
+    mutable std::mutex mutex_;
+    std::condition_variable jobReady_;
+    void postJob(std::function<void()> job);
+    void postEvent(std::function<void()> event);
+    void workerLoop();
+    void runEvents();
+    void reportControlError(const std::string& what);
+
+    // Channel switching
+    std::optional<Chanspec> configured_;
+    std::optional<Chanspec> switchTarget_;
+    mrpt::Clock::time_point switchRequested_;
+    std::optional<double> lastSwitchDowntime_;
+    std::unique_ptr<AccessPointSelector> selector_;
+    mrpt::Clock::time_point lastScan_, lastStatus_;
+
+    Counters counters_;
+    std::string lastError_;
+    void logStatus();
+};
+
+}  // namespace mrpt_wifi

@@ -1,0 +1,89 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/sensor/Subprocess.h>
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi
+{
+/** Why a router operation failed; the sensor reports it in its error state. */
+enum class RouterErrorKind : uint8_t
+{
+    Unreachable,           //!< no route, refused, DNS, connect timeout
+    AuthenticationFailed,  //!< key or password rejected
+    HostKeyMismatch,       //!< unknown or changed host key (known_hosts honoured)
+    Timeout,               //!< a remote command exceeded its time
+    CommandMissing,        //!< wl / nexutil / makecsiparams not found: not a Nexmon firmware
+    WrongFirmware,         //!< the tools ran but refused (no CSI support, bad ioctl)
+    CommandFailed          //!< anything else that exited non-zero
+};
+const char* toString(RouterErrorKind k);
+
+class RouterError : public std::runtime_error
+{
+public:
+    RouterError(RouterErrorKind kind, const std::string& what)
+        : std::runtime_error(std::string(toString(kind)) + ": " + what), kind_(kind)
+    {
+    }
+    RouterErrorKind kind() const { return kind_; }
+
+private:
+    RouterErrorKind kind_;
+};
+
+/** Runs shell commands on the router. */
+class RouterShell
+{
+public:
+    virtual ~RouterShell() = default;
+    /** Runs `command` in the router's shell; throws RouterError when the transport fails or
+     * the command exits non-zero (the error says which). Returns stdout. */
+    virtual std::string run(const std::string& command, double timeout_s) = 0;
+    /** Human-readable destination, e.g. "admin@192.168.50.1:22" (never a password). */
+    virtual std::string describe() const = 0;
+};
+
+struct SshOptions
+{
+    std::string host = "192.168.50.1";
+    unsigned port = 22;
+    std::string user = "admin";
+    std::string identityFile;    //!< private key; empty: ssh's defaults
+    std::string knownHostsFile;  //!< empty: ~/.ssh/known_hosts
+    /** Accept and remember the host key of a router never seen before (never a changed one). */
+    bool acceptNewHostKey = false;
+    /** Name of an environment variable holding the password. The password reaches ssh only
+     * through SSH_ASKPASS (our `mrpt-wifi-askpass`), never argv, logs or files. Empty: keys. */
+    std::string passwordEnvVar;
+    std::string askpassProgram;  //!< empty: mrpt-wifi-askpass beside the library, else PATH
+    double connectTimeout_s = 5.0;
+    /** Reuse one authenticated connection (ControlMaster) so a command costs one round trip. */
+    bool multiplex = true;
+    std::string sshProgram = "ssh";
+};
+
+/** RouterShell over the system OpenSSH client. */
+class SshRouterShell : public RouterShell
+{
+public:
+    explicit SshRouterShell(SshOptions options);
+    ~SshRouterShell() override;
+    std::string run(const std::string& command, double timeout_s) override;
+    std::string describe() const override;
+    /** The ssh argv for a command (for tests: proves no secret is on the command line). */
+    std::vector<std::string> sshArgv(const std::string& command) const;
+
+private:
+    SshOptions options_;
+    std::string controlDir_;
+};
+
+/** Classifies a failed ssh / remote command from its exit code and stderr. */
+RouterErrorKind classifyRouterFailure(const SubprocessResult& r);
+
+}  // namespace mrpt_wifi

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Installs what is needed, builds, and runs every test:
+#   1. the GoogleTest suites and integration tests with Debian's MRPT apps (Release build);
+#   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer;
+#   3. the libFuzzer target (clang) on the Nexmon parser + frame assembler, for a bounded time.
+# Ends with one line "summary: N passed, N failed". Exit code non-zero if anything failed.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+FUZZ_SECONDS=${FUZZ_SECONDS:-60}
+
+bash scripts/install-deps.sh || exit 1
+passed=0
+failed=0
+count_ctest() {  # adds ctest's "N% tests passed, F tests failed out of T" to the totals
+  local line total bad
+  line=$(grep -E "tests passed, [0-9]+ tests? failed out of [0-9]+" "$1" | tail -1)
+  total=$(sed -E 's/.*out of ([0-9]+).*/\1/' <<<"$line")
+  bad=$(sed -E 's/.*passed, ([0-9]+) tests? failed.*/\1/' <<<"$line")
+  if [ -z "$line" ]; then failed=$((failed + 1)); return; fi
+  passed=$((passed + total - bad)); failed=$((failed + bad))
+}
+
+echo "== [1/3] Release build and all tests"
+if bash scripts/build.sh; then
+  ctest --test-dir build --output-on-failure -j2 --timeout 600 2>&1 | tee build/ctest.log
+  count_ctest build/ctest.log
+else
+  echo "Release build FAILED"; failed=$((failed + 1))
+fi
+
+echo "== [2/3] ASan + UBSan build, unit tests"
+# Integration tests load our (instrumented) plugin into Debian's uninstrumented MRPT apps,
+# which ASan does not allow; they ran in step 1.
+if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMRPT_WIFI_SANITIZE=ON \
+     -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null && cmake --build build-asan -j"$(nproc)"; then
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j2 -LE integration --timeout 900 2>&1 | tee build-asan/ctest.log
+  count_ctest build-asan/ctest.log
+else
+  echo "ASan build FAILED"; failed=$((failed + 1))
+fi
+
+echo "== [3/3] libFuzzer: Nexmon parser + frame assembler, ${FUZZ_SECONDS} s"
+if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+     -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
+     -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" >/dev/null &&
+   cmake --build build-fuzz -j"$(nproc)" --target fuzz_nexmon_assembler fuzz_make_seeds; then
+  corpus=build-fuzz/corpus
+  rm -rf "$corpus"; mkdir -p "$corpus"
+  build-fuzz/bin/fuzz_make_seeds "$corpus"
+  if build-fuzz/bin/fuzz_nexmon_assembler -max_total_time="$FUZZ_SECONDS" -max_len=20000 \
+       -print_final_stats=1 "$corpus" >build-fuzz/fuzz.log 2>&1; then
+    tail -3 build-fuzz/fuzz.log; echo "fuzz: no crash in ${FUZZ_SECONDS} s"; passed=$((passed + 1))
+  else
+    tail -40 build-fuzz/fuzz.log; echo "fuzz: FAILED"; failed=$((failed + 1))
+  fi
+else
+  echo "fuzz build FAILED"; failed=$((failed + 1))
+fi
+
+echo "summary: ${passed} passed, ${failed} failed"
+[ "$failed" -eq 0 ]

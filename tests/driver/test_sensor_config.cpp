@@ -1,0 +1,66 @@
+#include <gtest/gtest.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt_wifi/sensor/CWiFiCSISensor.h>
+
+using namespace mrpt_wifi;
+
+namespace
+{
+std::string loadError(const std::string& ini)
+{
+    mrpt::config::CConfigFileMemory cfg(ini);
+    CWiFiCSISensor sensor;
+    try
+    {
+        sensor.loadConfig(cfg, "CSI");
+    }
+    catch (const std::exception& e)
+    {
+        return e.what();
+    }
+    return {};
+}
+}  // namespace
+
+TEST(CWiFiCSISensorConfig, RegisteredForRawlogGrabber)
+{
+    auto sensor = mrpt::hwdrivers::CGenericSensor::createSensorPtr("CWiFiCSISensor");
+    ASSERT_TRUE(sensor);
+    EXPECT_NE(dynamic_cast<CWiFiCSISensor*>(sensor.get()), nullptr);
+}
+
+TEST(CWiFiCSISensorConfig, ValidConfigurationLoads)
+{
+    EXPECT_EQ(
+        loadError("[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nsensorLabel = CSI_FRONT\n"
+                  "udp_port = 5600\nmac_filter = 11:11:11:*:*:*, 00:12:34:56:78:9b\n"
+                  "pose_yaw = 90\nchannel = 157/80\nrouter_control = true\nlogin_host = 127.0.0.1\n"
+                  "scan_period = 20\nauto_channel = true\ncore_mask = 0x3\n"),
+        "");
+}
+
+TEST(CWiFiCSISensorConfig, WrongKeysAndValuesAreNamed)
+{
+    // A typo: named, with its section and the key it probably meant.
+    auto e = loadError("[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nudp_prot = 5500\n");
+    EXPECT_NE(e.find("section 'CSI': unknown key 'udp_prot'"), std::string::npos) << e;
+    EXPECT_NE(e.find("did you mean 'udp_port'"), std::string::npos) << e;
+
+    e = loadError("[CSI]\nprocess_rate = 100\nudp_port = 70000\n");
+    EXPECT_NE(e.find("udp_port"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nchannel = 157/160\n");
+    EXPECT_NE(e.find("157/160"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nmac_filter = 11:11:1x:*:*:*\n");
+    EXPECT_NE(e.find("11:11:1x"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nsource = serial\n");
+    EXPECT_NE(e.find("'source'"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nsource = pcap\n");
+    EXPECT_NE(e.find("pcap_file"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nauto_channel = true\n");
+    EXPECT_NE(e.find("router_control"), std::string::npos) << e;
+    e = loadError(
+        "[CSI]\nprocess_rate = 100\npacket_mac_filter = "
+        "02:00:00:00:00:01,02:00:00:00:00:02,02:00:00:00:00:03,02:00:00:00:00:04,02:00:00:00:00:"
+        "05\n");
+    EXPECT_NE(e.find("at most 4"), std::string::npos) << e;
+}
