@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -74,7 +75,15 @@ int runMain(const std::string& program, const std::function<int()>& body)
     }
     catch (const std::exception& e)
     {
-        std::cerr << program << ": error: " << mrpt::exception_to_str(e) << std::endl;
+        // MRPT exceptions carry a banner and a backtrace: a user needs the message.
+        std::string msg = e.what();
+        if (const auto trace = msg.find("Call stack backtrace"); trace != std::string::npos)
+            msg.erase(trace);
+        for (const char* banner : {"==== MRPT exception ====\n", "Message:  "})
+            if (const auto b = msg.find(banner); b != std::string::npos)
+                msg.erase(b, std::strlen(banner));
+        while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+        std::cerr << program << ": error: " << msg << std::endl;
         return 1;
     }
 }

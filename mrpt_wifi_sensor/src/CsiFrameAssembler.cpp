@@ -196,6 +196,7 @@ bool CsiFrameAssembler::push(
         if (haveReference && behind < kLateWindow && !(p.obs && behind == 0))
         {
             ++stats_.lateDatagrams;
+            p.streamsSeen |= uint8_t(1u << h.stream);  // still teaches what the AP sends
             return true;
         }
         if (p.obs) emit(p);
@@ -231,7 +232,11 @@ void CsiFrameAssembler::startFrame(
     p.firmwareCounter = h.firmwareCounter;
     p.firstArrival = arrival;
     p.expectedCores = h.coreMask ? uint8_t(h.coreMask & options_.coreMask) : options_.coreMask;
-    if (h.streamMask) p.streamsSeen |= uint8_t(h.streamMask & options_.streamMask);
+    if (h.streamMask)
+    {
+        p.streamsSeen |= uint8_t(h.streamMask & options_.streamMask);
+        p.streamsKnown = true;
+    }
     p.streamsSeen |= uint8_t(1u << h.stream);
 
     auto obs = CObservationWiFiCSI::Create();
@@ -254,12 +259,14 @@ void CsiFrameAssembler::startFrame(
 
 bool CsiFrameAssembler::frameComplete(const Pending& p) const
 {
+    if (!p.streamsKnown) return false;
     const uint64_t expected = pairMask(p.expectedCores, p.streamsSeen);
     return (p.obs->presentMask & expected) == expected;
 }
 
 void CsiFrameAssembler::emit(Pending& p)
 {
+    p.streamsKnown = true;  // a whole frame went by: its streams are what the AP sends
     if (frameComplete(p))
         ++stats_.framesComplete;
     else

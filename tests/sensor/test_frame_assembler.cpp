@@ -2,6 +2,8 @@
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
 
+#include <algorithm>
+
 #include "SyntheticCsi.h"
 
 using namespace mrpt_wifi;
@@ -40,17 +42,27 @@ CsiFrameAssemblerOptions keepBins()
 TEST(CsiFrameAssembler, EmitsACompleteFrameOnItsLastDatagram)
 {
     Harness h(keepBins());
+    // The first frame teaches how many streams the transmitter sends: it goes out when the
+    // next one starts. From then on a frame goes out on its last datagram.
+    h.pushAll(
+        nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 6)),
+        t0 - std::chrono::milliseconds(10));
+    EXPECT_TRUE(h.frames.empty());
     const auto truth = test::syntheticFrame(4, 4, 80, 7);
     const auto datagrams = nexmon::encodeFrame(*truth);
     ASSERT_EQ(datagrams.size(), 16u);
     for (size_t i = 0; i < datagrams.size(); ++i)
     {
-        EXPECT_TRUE(h.frames.empty()) << "emitted before datagram " << i;
         h.push(datagrams[i], t0 + std::chrono::microseconds(i));
+        if (i + 1 < datagrams.size())
+        {
+            EXPECT_EQ(h.frames.size(), 1u) << "emitted at datagram " << i;
+        }
     }
     // No extra frame of latency (WiROS waits for the next frame).
-    ASSERT_EQ(h.frames.size(), 1u);
-    const auto& f = *h.frames[0];
+    ASSERT_EQ(h.frames.size(), 2u);
+    EXPECT_TRUE(h.frames[0]->isComplete());
+    const auto& f = *h.frames[1];
     EXPECT_TRUE(f.isComplete());
     EXPECT_EQ(f.nTx, 4);
     EXPECT_EQ(f.nRx, 4);
@@ -64,8 +76,30 @@ TEST(CsiFrameAssembler, EmitsACompleteFrameOnItsLastDatagram)
                 ASSERT_NEAR(
                     std::abs(f.at(tx, rx, b) - truth->at(tx, rx, b)), 0.0f,
                     std::abs(truth->at(tx, rx, b)) / 1024.0f);
-    EXPECT_EQ(h.assembler.stats().framesComplete, 1u);
+    EXPECT_EQ(h.assembler.stats().framesComplete, 2u);
     EXPECT_EQ(h.assembler.pendingFrames(), 0u);
+}
+
+TEST(CsiFrameAssembler, StreamMajorOrderDoesNotCutTheFirstFrameShort)
+{
+    // Datagrams stream by stream (cores 0..3 of stream 0 first): after four of them the frame
+    // looks complete for a one-stream transmitter. It must still come out as 4x4.
+    Harness h;
+    for (uint16_t seq = 30; seq < 33; ++seq)
+    {
+        const auto coreMajor = nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, seq));
+        for (unsigned stream = 0; stream < 4; ++stream)
+            for (unsigned core = 0; core < 4; ++core) h.push(coreMajor[core * 4 + stream], t0);
+    }
+    h.assembler.flushAll();
+    ASSERT_EQ(h.frames.size(), 3u);
+    for (const auto& f : h.frames)
+    {
+        EXPECT_EQ(f->nTx, 4);
+        EXPECT_TRUE(f->isComplete());
+    }
+    EXPECT_EQ(h.assembler.stats().lateDatagrams, 0u);
+    EXPECT_EQ(h.assembler.stats().framesComplete, 3u);
 }
 
 TEST(CsiFrameAssembler, IncompleteFrameEmittedWhenTheNextStarts)
@@ -127,16 +161,20 @@ TEST(CsiFrameAssembler, CountsDuplicatesAndLateDatagrams)
 TEST(CsiFrameAssembler, LearnsHowManyStreamsATransmitterSends)
 {
     Harness h;
-    // A one-stream client: complete after its four cores, no waiting for streams 1..3.
-    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(1, 4, 80, 1, "02:00:00:00:00:01")), t0);
-    ASSERT_EQ(h.frames.size(), 1u);
-    EXPECT_EQ(h.frames[0]->nTx, 1);
-    EXPECT_TRUE(h.frames[0]->isComplete());
-    // A four-stream AP: its first frame grows as streams appear, then completes.
-    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 1, "02:00:00:00:00:02")), t0);
+    const char *client = "02:00:00:00:00:01", *ap = "02:00:00:00:00:02";
+    // A one-stream client: once learnt, complete after its four cores.
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(1, 4, 80, 1, client)), t0);
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(1, 4, 80, 2, client)), t0);
     ASSERT_EQ(h.frames.size(), 2u);
-    EXPECT_EQ(h.frames[1]->nTx, 4);
+    EXPECT_EQ(h.frames[1]->nTx, 1);
     EXPECT_TRUE(h.frames[1]->isComplete());
+    // A four-stream AP: its frames grow as streams appear.
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 1, ap)), t0);
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 2, ap)), t0);
+    ASSERT_EQ(h.frames.size(), 4u);
+    EXPECT_EQ(h.frames[3]->nTx, 4);
+    EXPECT_TRUE(h.frames[3]->isComplete());
+    EXPECT_EQ(h.assembler.stats().framesIncomplete, 0u);
 }
 
 TEST(CsiFrameAssembler, InterleavedTransmittersAndGarbage)
@@ -151,7 +189,11 @@ TEST(CsiFrameAssembler, InterleavedTransmittersAndGarbage)
         h.push(junk, t0);
         h.push(b[i], t0);
     }
+    h.assembler.flushAll();
     ASSERT_EQ(h.frames.size(), 2u);
+    std::sort(
+        h.frames.begin(), h.frames.end(),
+        [](const auto& x, const auto& y) { return x->transmitter < y->transmitter; });
     EXPECT_EQ(h.frames[0]->transmitter.asString(), "02:00:00:00:00:0a");
     EXPECT_EQ(h.frames[0]->nfft(), 128u);
     EXPECT_EQ(h.frames[1]->nfft(), 64u);
@@ -165,6 +207,7 @@ TEST(CsiFrameAssembler, CoreMaskRejectsUnexpectedCores)
     o.coreMask = 0x03;  // makecsiparams -C 0x3
     Harness h(o);
     h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(1, 4, 80, 1)), t0);
+    h.assembler.flushAll();
     ASSERT_EQ(h.frames.size(), 1u);
     EXPECT_EQ(h.frames[0]->nRx, 2);
     EXPECT_TRUE(h.frames[0]->isComplete());

@@ -5,6 +5,7 @@
 #include <mrpt/system/COutputLogger.h>
 #include <mrpt_wifi/sensor/AccessPointSelector.h>
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/CsiSensorSettings.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 
 #include <condition_variable>
@@ -75,13 +76,7 @@ protected:
         const mrpt::config::CConfigFileBase& config, const std::string& section) override;
 
 private:
-    enum class Source
-    {
-        Udp,
-        Pcap
-    };
-    struct Settings;
-    std::unique_ptr<Settings> settings_;
+    std::unique_ptr<CsiSensorSettings> settings_;
 
     // Data path
     std::unique_ptr<UdpCsiReceiver> receiver_;

@@ -70,7 +70,11 @@ struct CsiFrameAssemblerStats
  * chanspec; one datagram per core × stream) into a CObservationWiFiCSI.
  *
  * A frame is emitted as soon as it is complete, when the next frame of its transmitter starts,
- * after `frameTimeout_s`, or by flushAll(). Malformed datagrams are counted, never thrown. */
+ * after `frameTimeout_s`, or by flushAll(). "Complete" means every expected core × every stream
+ * the transmitter sends; the current firmware doesn't say how many streams that is, so it is
+ * learnt from the transmitter's first frame (which therefore waits for the next frame or the
+ * timeout). A transmitter that later sends fewer streams yields frames emitted as incomplete,
+ * one frame late. Malformed datagrams are counted, never thrown. */
 class CsiFrameAssembler
 {
 public:
@@ -104,6 +108,10 @@ private:
         uint16_t lastEmittedSequence = 0;
         bool hasEmitted = false;
         uint8_t streamsSeen = 0;  //!< learnt: every stream this transmitter sent
+        /** Whether streamsSeen can be trusted to say when a frame is complete: the header says
+         * (UbiLocate), or a whole frame went by. Until then a frame waits for the next one or
+         * the timeout, so a stream-major datagram order can't cut the first frame short. */
+        bool streamsKnown = false;
     };
 
     void startFrame(

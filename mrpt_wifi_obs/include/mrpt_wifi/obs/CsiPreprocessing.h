@@ -1,0 +1,195 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/core/Clock.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/PhaseCalibration.h>
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace mrpt_wifi
+{
+/** The subcarriers a preprocessed frame holds, with their frequencies. Shared by every frame of
+ *  one channel, so estimators can key precomputed steering matrices on it. */
+struct SubcarrierLayout
+{
+    Chanspec chanspec;
+    std::vector<int> subcarriers;        //!< k, ascending
+    std::vector<uint16_t> bins;          //!< k + NFFT/2
+    std::vector<double> frequencies_Hz;  //!< f_c + k·312.5 kHz
+    double centerFrequency_Hz = 0;
+    size_t size() const { return subcarriers.size(); }
+};
+
+struct PreprocessOptions
+{
+    /** 80 MHz: multiply k = −128..−65 by −1 (the lowest 20 MHz sub-band arrives negated;
+     *  verified on real RT-AC86U captures, DESIGN.md §4). */
+    bool correctSubbandSign80 = true;
+    /** 40 MHz: multiply k = −64..−1 by −j, as WiROS does. Unverified on hardware: off. */
+    bool correctSubbandSign40 = false;
+    /** Leave the subcarriers the firmware overwrites with PHY status (k = +2 at 40/80 MHz) out
+     *  of the layout: a frame can't tell whether they were repaired. */
+    bool excludeFirmwareOverwritten = true;
+    /** Remove the per-packet linear phase across subcarriers (sampling-time offset plus the
+     *  mean channel delay; common to all antennas) and the common phase. Delays reported by the
+     *  estimators are then relative to the frame's mean delay. */
+    bool removeSamplingTimeOffset = true;
+    /** Scale every frame to unit mean power per (stream, antenna, subcarrier) (undoes AGC). */
+    bool normalizePower = true;
+    /** Frames with a reported RSSI below this are rejected (RSSI 0 = not reported: accepted). */
+    double minRssi_dBm = -127;
+    /** Without a calibration for the frame's channel: reject the frame (true) or use it
+     *  uncalibrated (false). */
+    bool requireCalibration = false;
+    /** Use at most this many transmit streams per frame (the first complete ones). */
+    unsigned maxStreams = 8;
+};
+
+enum class RejectReason : uint8_t
+{
+    Accepted = 0,
+    LowRssi,
+    NoCompleteStream,   //!< no transmit stream arrived on all receive antennas
+    ArrayMismatch,      //!< the CSI has more receive chains than the array has elements
+    DeadAntenna,        //!< an antenna reported (almost) nothing in every stream
+    NoCalibration,      //!< requireCalibration and none for this channel
+    UnsupportedChannel  //!< bandwidth without a data-subcarrier plan
+};
+const char* toString(RejectReason r);
+constexpr size_t kRejectReasonCount = 7;
+
+/** One CSI frame after preprocessing: the complete streams only, on the layout's subcarriers,
+ *  sign-corrected, calibrated, without sampling-time offset, power-normalised. */
+struct CleanCsi
+{
+    mrpt::Clock::time_point timestamp;
+    MacAddress transmitter;
+    Chanspec chanspec;
+    mrpt::poses::CPose3D sensorPose;
+    int8_t rssi_dBm = 0;
+    uint16_t sequenceNumber = 0;
+    unsigned nRx = 0;
+    unsigned nTx = 0;                        //!< streams used
+    std::vector<uint8_t> streamIndex;        //!< original transmit stream of each used one
+    std::shared_ptr<const SubcarrierLayout> layout;
+    /** CSI [(stream·nRx + rx)][subcarrier index of the layout]. */
+    Eigen::MatrixXcf H;
+    bool calibrated = false;
+    double removedSlope_rad = 0;  //!< linear phase removed per subcarrier step
+    double removedDelay_s = 0;    //!< the same as a delay: slope / (2π·312.5 kHz)
+
+    /** Spatial covariance over streams and subcarriers, split into `groups` contiguous
+     *  sub-bands (so each can use its own centre frequency): group g is
+     *  Σ_{m, k∈g} h_{m,k} h_{m,k}^H (nRx × nRx). Computed once per frame and group count. */
+    const std::vector<Eigen::MatrixXcd>& groupCovariances(unsigned groups) const;
+    /** Same over receive antennas and subcarriers, across transmit streams (nTx × nTx): the
+     *  transmitter-side covariance used for the angle of departure. */
+    const std::vector<Eigen::MatrixXcd>& txGroupCovariances(unsigned groups) const;
+
+    /** Which layout indices each of `groups` sub-bands covers: [begin, end). */
+    static std::pair<size_t, size_t> groupRange(size_t nSub, unsigned groups, unsigned g);
+
+private:
+    mutable unsigned covGroups_ = 0, txCovGroups_ = 0;
+    mutable std::vector<Eigen::MatrixXcd> cov_, txCov_;
+    friend class CsiPreprocessor;
+};
+
+/** Turns CObservationWiFiCSI into CleanCsi (see PreprocessOptions for the steps, in order:
+ *  RSSI gate, stream selection, sign correction, calibration, sampling-time offset, masked-bin
+ *  repair, power normalisation). Keeps per-channel caches; not thread-safe. */
+class CsiPreprocessor
+{
+public:
+    CsiPreprocessor() = default;
+    CsiPreprocessor(PreprocessOptions options, AntennaArray rxArray, CalibrationStore calib = {});
+
+    const PreprocessOptions& options() const { return options_; }
+    const AntennaArray& rxArray() const { return rxArray_; }
+    const CalibrationStore& calibration() const { return calib_; }
+
+    /** Fills `out` (reusing its storage). Throws CalibrationError when a calibration exists for
+     *  the channel but does not fit (another device, too few antennas). */
+    RejectReason process(const CObservationWiFiCSI& in, CleanCsi& out);
+
+    /** The layout used for a channel (cached). Throws std::invalid_argument for a bandwidth
+     *  without a data-subcarrier plan. */
+    std::shared_ptr<const SubcarrierLayout> layoutFor(const Chanspec& cs);
+
+    /** Checks before any processing that the array and the calibration fit a frame of this
+     *  shape; throws CalibrationError / std::invalid_argument with a clear message. */
+    void checkCompatible(const Chanspec& cs, unsigned nRx);
+
+    /** Per-packet phase slope across subcarriers [rad per subcarrier], from the lag-one
+     *  products summed over all rows (robust: no unwrapping). Exposed for tests. */
+    static double estimatePhaseSlope(const Eigen::MatrixXcf& H, const std::vector<int>& k);
+
+private:
+    struct ChannelCache
+    {
+        std::shared_ptr<const SubcarrierLayout> layout;
+        const PhaseCalibration* calibration = nullptr;
+        Eigen::MatrixXcf calibrationFactors;  //!< [rx][subcarrier]: e^{−jφ}·10^{−g/20}
+        Eigen::VectorXf sign;                 //!< sub-band correction (real parts)
+        Eigen::VectorXf signImag;             //!< imaginary part (the 40 MHz −j case)
+        bool hasSignCorrection = false;
+    };
+    ChannelCache& cacheFor(const Chanspec& cs, unsigned nRx);
+
+    PreprocessOptions options_;
+    AntennaArray rxArray_;
+    CalibrationStore calib_;
+    std::map<uint32_t, ChannelCache> caches_;
+};
+
+/** The recent frames of one transmitter: a ring of CleanCsi, storage reused. Frames of another
+ *  shape (channel, antennas, streams) than the ones held flush it. */
+class CsiWindow
+{
+public:
+    explicit CsiWindow(size_t capacity = 16, double maxAge_s = 1.0);
+
+    /** The slot the next frame goes into (oldest one when full): fill it, then commit(). */
+    CleanCsi& slot();
+    void commit();
+
+    size_t size() const { return count_; }
+    size_t capacity() const { return ring_.size(); }
+    /** Up to n most recent frames that are at most maxAge older than the newest, oldest first. */
+    void recent(size_t n, std::vector<const CleanCsi*>& out) const;
+    const CleanCsi& newest() const;
+    void clear() { count_ = 0; }
+
+private:
+    std::vector<CleanCsi> ring_;
+    size_t head_ = 0;  //!< index of the next slot
+    size_t count_ = 0;
+    double maxAge_s_;
+};
+
+/** One CsiWindow per transmitter MAC. */
+class TransmitterWindows
+{
+public:
+    TransmitterWindows(size_t capacity = 16, double maxAge_s = 1.0)
+        : capacity_(capacity), maxAge_s_(maxAge_s)
+    {
+    }
+    CsiWindow& of(const MacAddress& mac);
+    size_t size() const { return windows_.size(); }
+
+private:
+    size_t capacity_;
+    double maxAge_s_;
+    std::unordered_map<MacAddress, CsiWindow> windows_;
+};
+
+}  // namespace mrpt_wifi

@@ -1,0 +1,126 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/obs/Chanspec.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi
+{
+/** A calibration that does not fit the CSI or array it is applied to (wrong channel, device,
+ *  antenna count), or a malformed calibration file. The message says what and where. */
+class CalibrationError : public std::runtime_error
+{
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/** Phase (and optional gain) calibration of one receiver, for one (device, channel, bandwidth).
+ *
+ * Applying it: the CSI of antenna i at subcarrier k is multiplied by
+ * e^{−j·phases_rad[i][k]} · 10^{−gains_db[i]/20}, *after* the 80 MHz sub-band sign correction
+ * (CsiPreprocessing) and before the sampling-time-offset removal. A phase common to all antennas
+ * at one subcarrier does not change bearings; calibration tools usually fix antenna 0 to zero.
+ *
+ * File format (YAML, one file per device × channel × bandwidth; angles in radians):
+ * \code
+ * format: mrpt_wifi_phase_calibration
+ * version: 1
+ * device: rt-ac86u            # must equal the `name` of the receiver's array file
+ * chanspec: 155/80            # centre channel / bandwidth [MHz] (the sideband does not matter)
+ * date: 2024-05-02T10:31:00Z  # when it was made (free text, ISO 8601 recommended)
+ * frames_used: 1832
+ * residual_rad: 0.061         # RMS phase residual of the fit
+ * method: wifi-calibrate drive (PCA + LM)
+ * subband_sign_corrected: true  # phases are relative to sign-corrected CSI (must be true)
+ * antennas: 4
+ * subcarriers: [-122, -121, ...]   # k, ascending; every data subcarrier should be listed
+ * phases_rad:                  # [antenna][subcarrier], one row per antenna
+ *   - [0.0, 0.0, ...]
+ *   - [1.234, 1.229, ...]
+ * gains_db: [0.0, 0.4, -0.2, 0.1]  # optional, per antenna
+ * \endcode
+ *
+ * Folder layout, loaded by channel (CalibrationStore): `DIR/<device>/ch<centre>_<bw>mhz.yaml`,
+ * e.g. `calib/rt-ac86u/ch155_80mhz.yaml`, `calib/rt-ac86u/ch36_80mhz.yaml`. */
+struct PhaseCalibration
+{
+    static constexpr int kFormatVersion = 1;
+
+    std::string device;
+    Chanspec chanspec;
+    std::string date;
+    uint64_t framesUsed = 0;
+    double residual_rad = 0;
+    std::string method;
+    bool subbandSignCorrected = true;
+    std::vector<int> subcarriers;                  //!< k, ascending
+    std::vector<std::vector<double>> phases_rad;   //!< [antenna][index into subcarriers]
+    std::vector<double> gains_dB;                  //!< empty or one per antenna
+    std::string sourcePath;                        //!< file it was read from
+
+    size_t antennas() const { return phases_rad.size(); }
+
+    /** Reads a calibration file; throws CalibrationError naming the file and the problem. */
+    static PhaseCalibration fromYamlFile(const std::string& path);
+    static PhaseCalibration fromYamlText(
+        const std::string& text, const std::string& displayName = "<text>");
+    std::string asYamlText() const;
+    /** Writes the file (creating parent folders); throws CalibrationError on failure. */
+    void saveYamlFile(const std::string& path) const;
+
+    /** Consistency (sizes, ascending subcarriers, finite values); throws CalibrationError. */
+    void validate(const std::string& where = "calibration") const;
+
+    /** Phase [rad] of antenna i at subcarrier k: the listed value, linearly interpolated between
+     *  listed neighbours (unwrapped), held constant beyond the ends. */
+    double phaseAt(size_t antenna, int k) const;
+    /** Gain [dB] of antenna i (0 if the file has none). */
+    double gainAt(size_t antenna) const { return gains_dB.empty() ? 0.0 : gains_dB.at(antenna); }
+
+    /** Same centre channel and bandwidth. */
+    bool matchesChannel(const Chanspec& cs) const;
+    /** Throws CalibrationError with a clear message unless this calibration is for `device`,
+     *  the channel of `cs` and at least `nRx` antennas. */
+    void checkCompatible(const std::string& deviceName, const Chanspec& cs, size_t nRx) const;
+
+    /** `ch155_80mhz.yaml` */
+    static std::string fileNameFor(const Chanspec& cs);
+    /** `DIR/<device>/ch155_80mhz.yaml` */
+    static std::string pathFor(const std::string& dir, const std::string& device, const Chanspec& cs);
+};
+
+/** Where calibrations come from: one file (for one channel) or a folder with the layout above.
+ *  Files are loaded on first use and cached. */
+class CalibrationStore
+{
+public:
+    CalibrationStore() = default;
+    /** A file or a folder; throws CalibrationError if the path does not exist or a file is
+     *  malformed. */
+    static CalibrationStore open(const std::string& fileOrDir);
+    static CalibrationStore fromCalibration(PhaseCalibration c);
+
+    bool empty() const { return !single_ && dir_.empty(); }
+    bool isFolder() const { return !dir_.empty(); }
+    const std::string& path() const { return path_; }
+
+    /** The calibration for (device, channel), or nullptr if there is none for that channel.
+     *  Throws CalibrationError if the one found is for another device, or does not fit nRx. */
+    const PhaseCalibration* find(const std::string& device, const Chanspec& cs, size_t nRx) const;
+
+    /** What the folder holds for a device (file names), for messages. */
+    std::vector<std::string> available(const std::string& device) const;
+
+private:
+    std::string path_, dir_;
+    std::shared_ptr<PhaseCalibration> single_;
+    mutable std::map<std::string, std::shared_ptr<PhaseCalibration>> cache_;
+};
+
+}  // namespace mrpt_wifi

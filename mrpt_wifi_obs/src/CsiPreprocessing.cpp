@@ -1,0 +1,362 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/Subcarriers.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace mrpt_wifi
+{
+const char* toString(RejectReason r)
+{
+    switch (r)
+    {
+        case RejectReason::Accepted:
+            return "accepted";
+        case RejectReason::LowRssi:
+            return "RSSI below the gate";
+        case RejectReason::NoCompleteStream:
+            return "no complete stream";
+        case RejectReason::ArrayMismatch:
+            return "more receive chains than array elements";
+        case RejectReason::DeadAntenna:
+            return "dead antenna";
+        case RejectReason::NoCalibration:
+            return "no calibration for the channel";
+        case RejectReason::UnsupportedChannel:
+            return "unsupported bandwidth";
+    }
+    return "?";
+}
+
+// ---------------------------------------------------------------------------------------------
+std::pair<size_t, size_t> CleanCsi::groupRange(size_t nSub, unsigned groups, unsigned g)
+{
+    return {nSub * g / groups, nSub * (g + 1) / groups};
+}
+
+const std::vector<Eigen::MatrixXcd>& CleanCsi::groupCovariances(unsigned groups) const
+{
+    if (covGroups_ == groups && cov_.size() == groups) return cov_;
+    cov_.resize(groups);
+    const Eigen::Index nSub = H.cols();
+    for (unsigned g = 0; g < groups; ++g)
+    {
+        const auto [b, e] = groupRange(size_t(nSub), groups, g);
+        Eigen::MatrixXcf acc = Eigen::MatrixXcf::Zero(nRx, nRx);
+        for (unsigned m = 0; m < nTx; ++m)
+        {
+            const auto block =
+                H.block(Eigen::Index(m * nRx), Eigen::Index(b), nRx, Eigen::Index(e - b));
+            acc.noalias() += block * block.adjoint();
+        }
+        cov_[g] = acc.cast<std::complex<double>>();
+    }
+    covGroups_ = groups;
+    return cov_;
+}
+
+const std::vector<Eigen::MatrixXcd>& CleanCsi::txGroupCovariances(unsigned groups) const
+{
+    if (txCovGroups_ == groups && txCov_.size() == groups) return txCov_;
+    txCov_.resize(groups);
+    const Eigen::Index nSub = H.cols();
+    for (unsigned g = 0; g < groups; ++g)
+    {
+        const auto [b, e] = groupRange(size_t(nSub), groups, g);
+        Eigen::MatrixXcd acc = Eigen::MatrixXcd::Zero(nTx, nTx);
+        for (unsigned i = 0; i < nRx; ++i)
+        {
+            // Rows i, nRx + i, 2·nRx + i, ...: one receive antenna across the streams.
+            Eigen::MatrixXcf rows(nTx, Eigen::Index(e - b));
+            for (unsigned m = 0; m < nTx; ++m)
+                rows.row(m) =
+                    H.block(Eigen::Index(m * nRx + i), Eigen::Index(b), 1, Eigen::Index(e - b));
+            acc += (rows * rows.adjoint()).cast<std::complex<double>>();
+        }
+        txCov_[g] = acc;
+    }
+    txCovGroups_ = groups;
+    return txCov_;
+}
+
+// ---------------------------------------------------------------------------------------------
+CsiPreprocessor::CsiPreprocessor(
+    PreprocessOptions options, AntennaArray rxArray, CalibrationStore calib)
+    : options_(options), rxArray_(std::move(rxArray)), calib_(std::move(calib))
+{
+}
+
+std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const Chanspec& cs)
+{
+    auto layout = std::make_shared<SubcarrierLayout>();
+    layout->chanspec = cs;
+    layout->centerFrequency_Hz = cs.centerFrequencyHz();
+    const auto overwritten = firmwareOverwrittenSubcarriers(cs.bandwidthMHz);
+    for (int k : dataSubcarriers(cs.bandwidthMHz))
+    {
+        if (options_.excludeFirmwareOverwritten &&
+            std::find(overwritten.begin(), overwritten.end(), k) != overwritten.end())
+            continue;
+        layout->subcarriers.push_back(k);
+        layout->bins.push_back(uint16_t(subcarrierToBin(k, cs.nfft())));
+        layout->frequencies_Hz.push_back(subcarrierFrequencyHz(cs, k));
+    }
+    return layout;
+}
+
+CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(const Chanspec& cs, unsigned nRx)
+{
+    const uint32_t key =
+        (uint32_t(cs.centerChannel) << 16) | (uint32_t(cs.bandwidthMHz) << 4) | nRx;
+    auto it = caches_.find(key);
+    if (it != caches_.end()) return it->second;
+
+    ChannelCache c;
+    c.layout = layoutFor(cs);
+    const size_t nSub = c.layout->size();
+    c.sign = Eigen::VectorXf::Ones(Eigen::Index(nSub));
+    c.signImag = Eigen::VectorXf::Zero(Eigen::Index(nSub));
+    for (size_t j = 0; j < nSub; ++j)
+    {
+        const int k = c.layout->subcarriers[j];
+        if (cs.bandwidthMHz == 80 && options_.correctSubbandSign80 && k < -64)
+        {
+            c.sign[Eigen::Index(j)] = -1.f;
+            c.hasSignCorrection = true;
+        }
+        if (cs.bandwidthMHz == 40 && options_.correctSubbandSign40 && k < 0)
+        {
+            c.sign[Eigen::Index(j)] = 0.f;
+            c.signImag[Eigen::Index(j)] = -1.f;
+            c.hasSignCorrection = true;
+        }
+    }
+    c.calibration = calib_.find(rxArray_.name, cs, nRx);
+    if (c.calibration)
+    {
+        c.calibrationFactors.resize(nRx, Eigen::Index(nSub));
+        for (unsigned i = 0; i < nRx; ++i)
+        {
+            const double gain = std::pow(10.0, -c.calibration->gainAt(i) / 20.0);
+            for (size_t j = 0; j < nSub; ++j)
+                c.calibrationFactors(i, Eigen::Index(j)) = std::complex<float>(
+                    std::polar(gain, -c.calibration->phaseAt(i, c.layout->subcarriers[j])));
+        }
+    }
+    return caches_.emplace(key, std::move(c)).first->second;
+}
+
+void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
+{
+    if (nRx > rxArray_.size())
+        throw std::invalid_argument(
+            "the CSI has " + std::to_string(nRx) + " receive chains but the array '" +
+            rxArray_.name + "'" +
+            (rxArray_.sourcePath.empty() ? "" : " (" + rxArray_.sourcePath + ")") + " has " +
+            std::to_string(rxArray_.size()) + " elements");
+    dataSubcarriers(cs.bandwidthMHz);   // throws for an unsupported bandwidth
+    const auto& c = cacheFor(cs, nRx);  // throws CalibrationError for a mismatching calibration
+    if (options_.requireCalibration && !c.calibration)
+        throw CalibrationError(
+            "no phase calibration for device '" + rxArray_.name + "' on " + cs.asString() +
+            " in '" + calib_.path() + "'");
+}
+
+double CsiPreprocessor::estimatePhaseSlope(const Eigen::MatrixXcf& H, const std::vector<int>& k)
+{
+    std::complex<double> acc = 0;
+    for (size_t j = 0; j + 1 < k.size(); ++j)
+    {
+        if (k[j + 1] - k[j] != 1) continue;
+        const auto c = H.col(Eigen::Index(j + 1)).dot(H.col(Eigen::Index(j)));  // Σ conj(a)·b
+        acc += std::conj(std::complex<double>(c));
+    }
+    return std::arg(acc);
+}
+
+RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& out)
+{
+    if (in.rssi_dBm != 0 && in.rssi_dBm < options_.minRssi_dBm) return RejectReason::LowRssi;
+    if (in.nRx > rxArray_.size()) return RejectReason::ArrayMismatch;
+    const unsigned nRx = in.nRx;
+    const unsigned nfft = in.nfft();
+    if (in.chanspec.bandwidthMHz != 20 && in.chanspec.bandwidthMHz != 40 &&
+        in.chanspec.bandwidthMHz != 80)
+        return RejectReason::UnsupportedChannel;
+    if (in.csi.size() < size_t(in.nTx) * nRx * nfft) return RejectReason::NoCompleteStream;
+    ChannelCache& cache = cacheFor(in.chanspec, nRx);
+    if (options_.requireCalibration && !cache.calibration) return RejectReason::NoCalibration;
+    const SubcarrierLayout& layout = *cache.layout;
+    const size_t nSub = layout.size();
+
+    // Streams that arrived on every antenna, with energy on every antenna.
+    out.streamIndex.clear();
+    bool sawDead = false;
+    for (unsigned m = 0; m < in.nTx && out.streamIndex.size() < options_.maxStreams; ++m)
+    {
+        bool complete = true, dead = false;
+        for (unsigned i = 0; i < nRx && complete; ++i)
+        {
+            if (!in.isPresent(m, i))
+            {
+                complete = false;
+                break;
+            }
+            const auto* p = in.pair(m, i);
+            float energy = 0;
+            for (uint16_t b : layout.bins) energy += std::norm(p[b]);
+            if (!(energy > 0) || !std::isfinite(energy)) dead = true;
+        }
+        if (!complete) continue;
+        if (dead)
+        {
+            sawDead = true;
+            continue;
+        }
+        out.streamIndex.push_back(uint8_t(m));
+    }
+    if (out.streamIndex.empty())
+        return sawDead ? RejectReason::DeadAntenna : RejectReason::NoCompleteStream;
+
+    out.timestamp = in.timestamp;
+    out.transmitter = in.transmitter;
+    out.chanspec = in.chanspec;
+    out.sensorPose = in.sensorPose;
+    out.rssi_dBm = in.rssi_dBm;
+    out.sequenceNumber = in.sequenceNumber;
+    out.nRx = nRx;
+    out.nTx = unsigned(out.streamIndex.size());
+    out.layout = cache.layout;
+    out.calibrated = cache.calibration != nullptr;
+    out.covGroups_ = out.txCovGroups_ = 0;
+    out.H.resize(Eigen::Index(out.nTx * nRx), Eigen::Index(nSub));
+
+    // Gather, sign-correct, calibrate.
+    for (unsigned s = 0; s < out.nTx; ++s)
+        for (unsigned i = 0; i < nRx; ++i)
+        {
+            const auto* p = in.pair(out.streamIndex[s], i);
+            auto row = out.H.row(Eigen::Index(s * nRx + i));
+            for (size_t j = 0; j < nSub; ++j) row[Eigen::Index(j)] = p[layout.bins[j]];
+            if (cache.hasSignCorrection)
+                for (size_t j = 0; j < nSub; ++j)
+                    row[Eigen::Index(j)] *= std::complex<float>(
+                        cache.sign[Eigen::Index(j)], cache.signImag[Eigen::Index(j)]);
+            if (cache.calibration) row = row.cwiseProduct(cache.calibrationFactors.row(i));
+        }
+
+    // Masked bins hold no measurement: zero now (no weight in the slope), repaired below.
+    std::vector<size_t> masked;
+    for (uint16_t b : in.maskedBins)
+    {
+        const auto it = std::lower_bound(layout.bins.begin(), layout.bins.end(), b);
+        if (it != layout.bins.end() && *it == b)
+        {
+            masked.push_back(size_t(it - layout.bins.begin()));
+            out.H.col(Eigen::Index(masked.back())).setZero();
+        }
+    }
+
+    out.removedSlope_rad = 0;
+    out.removedDelay_s = 0;
+    if (options_.removeSamplingTimeOffset)
+    {
+        const double slope = estimatePhaseSlope(out.H, layout.subcarriers);
+        out.removedSlope_rad = slope;
+        out.removedDelay_s = -slope / (2 * M_PI * kSubcarrierSpacingHz);
+        // Common phase too (CFO): make the first row's mean phase zero.
+        std::complex<double> ref = 0;
+        for (size_t j = 0; j < nSub; ++j)
+            ref += std::complex<double>(out.H(0, Eigen::Index(j))) *
+                   std::polar(1.0, -slope * layout.subcarriers[j]);
+        const double common = std::arg(ref);
+        for (size_t j = 0; j < nSub; ++j)
+            out.H.col(Eigen::Index(j)) *=
+                std::complex<float>(std::polar(1.0, -slope * layout.subcarriers[j] - common));
+    }
+
+    // Repair masked subcarriers from their nearest unmasked neighbours (linear, complex).
+    if (!masked.empty())
+    {
+        std::vector<bool> isMasked(nSub, false);
+        for (size_t j : masked) isMasked[j] = true;
+        for (size_t j : masked)
+        {
+            long lo = long(j) - 1, hi = long(j) + 1;
+            while (lo >= 0 && isMasked[size_t(lo)]) --lo;
+            while (hi < long(nSub) && isMasked[size_t(hi)]) ++hi;
+            const auto& k = layout.subcarriers;
+            if (lo >= 0 && hi < long(nSub))
+            {
+                const float t = float(k[j] - k[size_t(lo)]) / float(k[size_t(hi)] - k[size_t(lo)]);
+                out.H.col(Eigen::Index(j)) =
+                    (1 - t) * out.H.col(Eigen::Index(lo)) + t * out.H.col(Eigen::Index(hi));
+            }
+            else if (lo >= 0)
+                out.H.col(Eigen::Index(j)) = out.H.col(Eigen::Index(lo));
+            else if (hi < long(nSub))
+                out.H.col(Eigen::Index(j)) = out.H.col(Eigen::Index(hi));
+        }
+    }
+
+    if (options_.normalizePower)
+    {
+        const float meanPower = out.H.squaredNorm() / float(out.H.size());
+        if (meanPower > 0) out.H *= 1.0f / std::sqrt(meanPower);
+    }
+    return RejectReason::Accepted;
+}
+
+// ---------------------------------------------------------------------------------------------
+CsiWindow::CsiWindow(size_t capacity, double maxAge_s)
+    : ring_(std::max<size_t>(capacity, 1)), maxAge_s_(maxAge_s)
+{
+}
+
+CleanCsi& CsiWindow::slot()
+{
+    return ring_[head_];
+}
+
+void CsiWindow::commit()
+{
+    const CleanCsi& added = ring_[head_];
+    if (count_ > 0)
+    {
+        const CleanCsi& prev = newest();
+        if (prev.layout != added.layout || prev.nRx != added.nRx || prev.nTx != added.nTx ||
+            prev.H.rows() != added.H.rows() || added.timestamp < prev.timestamp)
+            count_ = 0;  // another shape (or time went back): the old frames don't combine
+    }
+    head_ = (head_ + 1) % ring_.size();
+    count_ = std::min(count_ + 1, ring_.size());
+}
+
+const CleanCsi& CsiWindow::newest() const
+{
+    return ring_[(head_ + ring_.size() - 1) % ring_.size()];
+}
+
+void CsiWindow::recent(size_t n, std::vector<const CleanCsi*>& out) const
+{
+    out.clear();
+    if (count_ == 0) return;
+    const auto tNewest = newest().timestamp;
+    n = std::min(n, count_);
+    for (size_t back = n; back-- > 0;)
+    {
+        const CleanCsi& f = ring_[(head_ + ring_.size() - 1 - back) % ring_.size()];
+        if (mrpt::system::timeDifference(f.timestamp, tNewest) > maxAge_s_) continue;
+        out.push_back(&f);
+    }
+}
+
+CsiWindow& TransmitterWindows::of(const MacAddress& mac)
+{
+    auto it = windows_.find(mac);
+    if (it == windows_.end()) it = windows_.emplace(mac, CsiWindow(capacity_, maxAge_s_)).first;
+    return it->second;
+}
+
+}  // namespace mrpt_wifi

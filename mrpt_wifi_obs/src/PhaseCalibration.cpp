@@ -1,0 +1,336 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/containers/yaml.h>
+#include <mrpt_wifi/obs/PhaseCalibration.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace mrpt_wifi
+{
+namespace fs = std::filesystem;
+
+namespace
+{
+[[noreturn]] void fail(const std::string& where, const std::string& what)
+{
+    throw CalibrationError("phase calibration " + where + ": " + what);
+}
+
+const mrpt::containers::yaml& required(
+    const mrpt::containers::yaml& doc, const std::string& key, const std::string& where)
+{
+    if (!doc.has(key)) fail(where, "missing key '" + key + "'");
+    return doc[key];
+}
+
+template <class T>
+T asValue(const mrpt::containers::yaml& node, const std::string& key, const std::string& where)
+{
+    try
+    {
+        return node.as<T>();
+    }
+    catch (const std::exception&)
+    {
+        fail(where, "key '" + key + "' has the wrong type");
+    }
+}
+
+std::vector<double> numberList(
+    const mrpt::containers::yaml& node, const std::string& key, const std::string& where)
+{
+    if (!node.isSequence()) fail(where, "'" + key + "' must be a list of numbers");
+    std::vector<double> v;
+    v.reserve(node.asSequence().size());
+    for (const auto& e : node.asSequence()) v.push_back(asValue<double>(e, key, where));
+    return v;
+}
+}  // namespace
+
+PhaseCalibration PhaseCalibration::fromYamlFile(const std::string& path)
+{
+    std::ifstream f(path);
+    if (!f) throw CalibrationError("phase calibration '" + path + "': cannot open the file");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    PhaseCalibration c = fromYamlText(ss.str(), "'" + path + "'");
+    c.sourcePath = path;
+    return c;
+}
+
+PhaseCalibration PhaseCalibration::fromYamlText(
+    const std::string& text, const std::string& displayName)
+{
+    const std::string& w = displayName;
+    mrpt::containers::yaml doc;
+    try
+    {
+        doc = mrpt::containers::yaml::FromText(text);
+    }
+    catch (const std::exception& e)
+    {
+        fail(w, std::string("not valid YAML: ") + e.what());
+    }
+    if (!doc.isMap()) fail(w, "expected a YAML map");
+    static const char* known[] = {
+        "format",
+        "version",
+        "device",
+        "chanspec",
+        "date",
+        "frames_used",
+        "residual_rad",
+        "method",
+        "antennas",
+        "subcarriers",
+        "phases_rad",
+        "gains_db",
+        "subband_sign_corrected"};
+    for (const auto& kv : doc.asMap())
+    {
+        const std::string key = kv.first.as<std::string>();
+        if (std::find(std::begin(known), std::end(known), key) == std::end(known))
+            fail(w, "unknown key '" + key + "'");
+    }
+    if (asValue<std::string>(required(doc, "format", w), "format", w) !=
+        "mrpt_wifi_phase_calibration")
+        fail(w, "'format' is not mrpt_wifi_phase_calibration");
+    const int version = asValue<int>(required(doc, "version", w), "version", w);
+    if (version != kFormatVersion)
+        fail(
+            w, "version " + std::to_string(version) + " is not supported (expected " +
+                   std::to_string(kFormatVersion) + ")");
+
+    PhaseCalibration c;
+    c.device = asValue<std::string>(required(doc, "device", w), "device", w);
+    const std::string cs = asValue<std::string>(required(doc, "chanspec", w), "chanspec", w);
+    try
+    {
+        c.chanspec = Chanspec::fromString(cs);
+    }
+    catch (const std::exception& e)
+    {
+        fail(w, "chanspec '" + cs + "': " + e.what());
+    }
+    if (doc.has("date")) c.date = asValue<std::string>(doc["date"], "date", w);
+    if (doc.has("frames_used"))
+        c.framesUsed = asValue<uint64_t>(doc["frames_used"], "frames_used", w);
+    if (doc.has("residual_rad"))
+        c.residual_rad = asValue<double>(doc["residual_rad"], "residual_rad", w);
+    if (doc.has("method")) c.method = asValue<std::string>(doc["method"], "method", w);
+    if (doc.has("subband_sign_corrected"))
+        c.subbandSignCorrected =
+            asValue<bool>(doc["subband_sign_corrected"], "subband_sign_corrected", w);
+    for (double k : numberList(required(doc, "subcarriers", w), "subcarriers", w))
+    {
+        if (k != std::round(k)) fail(w, "subcarriers must be integers");
+        c.subcarriers.push_back(int(k));
+    }
+    const auto& rows = required(doc, "phases_rad", w);
+    if (!rows.isSequence()) fail(w, "'phases_rad' must be a list of per-antenna lists");
+    for (const auto& r : rows.asSequence()) c.phases_rad.push_back(numberList(r, "phases_rad", w));
+    if (doc.has("gains_db")) c.gains_dB = numberList(doc["gains_db"], "gains_db", w);
+    const size_t antennas = asValue<size_t>(required(doc, "antennas", w), "antennas", w);
+    if (antennas != c.phases_rad.size())
+        fail(
+            w, "'antennas' says " + std::to_string(antennas) + " but 'phases_rad' has " +
+                   std::to_string(c.phases_rad.size()) + " rows");
+    c.validate(w);
+    return c;
+}
+
+void PhaseCalibration::validate(const std::string& where) const
+{
+    if (device.empty()) fail(where, "empty device name");
+    if (!subbandSignCorrected)
+        fail(
+            where,
+            "subband_sign_corrected: false is not supported; make the calibration on "
+            "sign-corrected CSI");
+    if (phases_rad.empty()) fail(where, "no antennas");
+    if (subcarriers.empty()) fail(where, "no subcarriers");
+    const int edge = int(chanspec.nfft() / 2);
+    for (size_t j = 0; j < subcarriers.size(); ++j)
+    {
+        if (subcarriers[j] < -edge || subcarriers[j] >= edge)
+            fail(
+                where, "subcarrier " + std::to_string(subcarriers[j]) + " is outside ±" +
+                           std::to_string(edge) + " for " + chanspec.asString());
+        if (j > 0 && subcarriers[j] <= subcarriers[j - 1])
+            fail(where, "subcarriers must be strictly ascending");
+    }
+    for (size_t i = 0; i < phases_rad.size(); ++i)
+    {
+        if (phases_rad[i].size() != subcarriers.size())
+            fail(
+                where, "phases_rad[" + std::to_string(i) + "] has " +
+                           std::to_string(phases_rad[i].size()) + " values for " +
+                           std::to_string(subcarriers.size()) + " subcarriers");
+        for (double p : phases_rad[i])
+            if (!std::isfinite(p)) fail(where, "phases_rad holds a non-finite value");
+    }
+    if (!gains_dB.empty() && gains_dB.size() != phases_rad.size())
+        fail(
+            where, "gains_db has " + std::to_string(gains_dB.size()) + " values for " +
+                       std::to_string(phases_rad.size()) + " antennas");
+}
+
+std::string PhaseCalibration::asYamlText() const
+{
+    validate();
+    std::ostringstream o;
+    o.precision(10);
+    o << "# mrpt_wifi phase calibration: CSI of antenna i at subcarrier k is multiplied by\n"
+         "# exp(-j*phases_rad[i][k]) * 10^(-gains_db[i]/20) after the sub-band sign correction.\n";
+    o << "format: mrpt_wifi_phase_calibration\n";
+    o << "version: " << kFormatVersion << "\n";
+    o << "device: " << device << "\n";
+    o << "chanspec: " << chanspec.asString() << "\n";
+    o << "date: '" << date << "'\n";
+    o << "frames_used: " << framesUsed << "\n";
+    o << "residual_rad: " << residual_rad << "\n";
+    o << "method: '" << method << "'\n";
+    o << "subband_sign_corrected: " << (subbandSignCorrected ? "true" : "false") << "\n";
+    o << "antennas: " << phases_rad.size() << "\n";
+    o << "subcarriers: [";
+    for (size_t j = 0; j < subcarriers.size(); ++j) o << (j ? ", " : "") << subcarriers[j];
+    o << "]\nphases_rad:\n";
+    for (const auto& row : phases_rad)
+    {
+        o << "  - [";
+        for (size_t j = 0; j < row.size(); ++j) o << (j ? ", " : "") << row[j];
+        o << "]\n";
+    }
+    if (!gains_dB.empty())
+    {
+        o << "gains_db: [";
+        for (size_t i = 0; i < gains_dB.size(); ++i) o << (i ? ", " : "") << gains_dB[i];
+        o << "]\n";
+    }
+    return o.str();
+}
+
+void PhaseCalibration::saveYamlFile(const std::string& path) const
+{
+    const std::string text = asYamlText();
+    std::error_code ec;
+    const fs::path parent = fs::path(path).parent_path();
+    if (!parent.empty()) fs::create_directories(parent, ec);
+    std::ofstream f(path);
+    if (!(f << text)) throw CalibrationError("phase calibration: cannot write '" + path + "'");
+}
+
+double PhaseCalibration::phaseAt(size_t antenna, int k) const
+{
+    const auto& row = phases_rad.at(antenna);
+    const auto it = std::lower_bound(subcarriers.begin(), subcarriers.end(), k);
+    if (it == subcarriers.end()) return row.back();
+    const size_t j = size_t(it - subcarriers.begin());
+    if (*it == k || j == 0) return row[j];
+    // Interpolate on the shorter arc between the two neighbours.
+    const double p0 = row[j - 1], p1 = row[j];
+    const double d = std::remainder(p1 - p0, 2 * M_PI);
+    const double t = double(k - subcarriers[j - 1]) / double(subcarriers[j] - subcarriers[j - 1]);
+    return p0 + t * d;
+}
+
+bool PhaseCalibration::matchesChannel(const Chanspec& cs) const
+{
+    return cs.centerChannel == chanspec.centerChannel && cs.bandwidthMHz == chanspec.bandwidthMHz;
+}
+
+void PhaseCalibration::checkCompatible(
+    const std::string& deviceName, const Chanspec& cs, size_t nRx) const
+{
+    const std::string src = sourcePath.empty() ? "" : " ('" + sourcePath + "')";
+    if (device != deviceName)
+        throw CalibrationError(
+            "phase calibration" + src + " is for device '" + device +
+            "', but the receiver's "
+            "array is '" +
+            deviceName + "'");
+    if (!matchesChannel(cs))
+        throw CalibrationError(
+            "phase calibration" + src + " is for channel " + chanspec.asString() +
+            ", but the CSI is on " + cs.asString() + ": calibrate that channel or pass a folder");
+    if (antennas() < nRx)
+        throw CalibrationError(
+            "phase calibration" + src + " has " + std::to_string(antennas()) +
+            " antennas, but the CSI has " + std::to_string(nRx) + " receive chains");
+}
+
+std::string PhaseCalibration::fileNameFor(const Chanspec& cs)
+{
+    return "ch" + std::to_string(cs.centerChannel) + "_" + std::to_string(cs.bandwidthMHz) +
+           "mhz.yaml";
+}
+
+std::string PhaseCalibration::pathFor(
+    const std::string& dir, const std::string& device, const Chanspec& cs)
+{
+    return (fs::path(dir) / device / fileNameFor(cs)).string();
+}
+
+CalibrationStore CalibrationStore::open(const std::string& fileOrDir)
+{
+    CalibrationStore s;
+    s.path_ = fileOrDir;
+    if (fs::is_directory(fileOrDir))
+        s.dir_ = fileOrDir;
+    else if (fs::is_regular_file(fileOrDir))
+        s.single_ = std::make_shared<PhaseCalibration>(PhaseCalibration::fromYamlFile(fileOrDir));
+    else
+        throw CalibrationError("phase calibration '" + fileOrDir + "' does not exist");
+    return s;
+}
+
+CalibrationStore CalibrationStore::fromCalibration(PhaseCalibration c)
+{
+    c.validate();
+    CalibrationStore s;
+    s.path_ = c.sourcePath.empty() ? "<in memory>" : c.sourcePath;
+    s.single_ = std::make_shared<PhaseCalibration>(std::move(c));
+    return s;
+}
+
+const PhaseCalibration* CalibrationStore::find(
+    const std::string& device, const Chanspec& cs, size_t nRx) const
+{
+    if (single_)
+    {
+        single_->checkCompatible(device, cs, nRx);
+        return single_.get();
+    }
+    if (dir_.empty()) return nullptr;
+    const std::string p = PhaseCalibration::pathFor(dir_, device, cs);
+    auto it = cache_.find(p);
+    if (it == cache_.end())
+    {
+        std::shared_ptr<PhaseCalibration> c;
+        if (fs::exists(p))
+            c = std::make_shared<PhaseCalibration>(PhaseCalibration::fromYamlFile(p));
+        it = cache_.emplace(p, c).first;
+    }
+    if (it->second) it->second->checkCompatible(device, cs, nRx);
+    return it->second.get();
+}
+
+std::vector<std::string> CalibrationStore::available(const std::string& device) const
+{
+    std::vector<std::string> out;
+    if (single_)
+    {
+        out.push_back(single_->device + " " + single_->chanspec.asString());
+        return out;
+    }
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(fs::path(dir_) / device, ec))
+        if (e.path().extension() == ".yaml") out.push_back(e.path().filename().string());
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace mrpt_wifi

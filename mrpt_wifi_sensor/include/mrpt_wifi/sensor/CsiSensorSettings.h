@@ -1,0 +1,56 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt_wifi/sensor/AccessPointSelector.h>
+#include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/NexmonRouterControl.h>
+#include <mrpt_wifi/sensor/UdpCsiReceiver.h>
+
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi
+{
+/** Everything a CWiFiCSISensor .ini section configures (share/rawlog-grabber/ documents every
+ * key). Shared by the driver and csi-router, so both read the same files the same way. */
+struct CsiSensorSettings
+{
+    enum class Source
+    {
+        Udp,
+        Pcap
+    };
+    Source source = Source::Udp;
+    UdpCsiReceiverOptions udp;
+    std::string pcapFile;
+    double pcapSpeed = 1.0;
+    std::string routerAddress;
+    std::vector<MacPattern> macFilter;
+    int minRssi_dBm = -128;
+    CsiFrameAssemblerOptions assembler;
+    double statusPeriod_s = 10.0;
+    bool abortOnError = false;
+
+    bool routerControl = false;
+    SshOptions ssh;
+    RouterSetupOptions setup;
+    bool loadModule = true;
+    CsiExtractionSettings extraction;
+
+    bool transmitterMode = false;
+    TransmitterSettings transmitter;
+
+    double scanPeriod_s = 0;
+    bool autoChannel = false;
+    bool autoMacFilter = true;
+    AccessPointSelectorOptions selector;
+};
+
+/** Reads a [section] of a rawlog-grabber .ini. Unknown keys and bad values throw
+ * std::invalid_argument naming the section, the key (and the key a typo probably meant). */
+CsiSensorSettings loadCsiSensorSettings(
+    const mrpt::config::CConfigFileBase& config, const std::string& section,
+    const std::string& sensorLabel);
+
+}  // namespace mrpt_wifi
