@@ -1,0 +1,223 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPoint2D.h>
+#include <mrpt/math/TPose2D.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt_wifi/obs/Chanspec.h>
+#include <mrpt_wifi/obs/MacAddress.h>
+#include <mrpt_wifi/sim/AntennaArray.h>
+
+#include <complex>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+/** Radio channel simulator: scenes, wideband CSI synthesis, hardware impairments, robot motion. */
+namespace mrpt_wifi::sim
+{
+/** A scenario file problem, located: "FILE:LINE: key.path: message". */
+class ScenarioError : public std::runtime_error
+{
+public:
+    ScenarioError(
+        const std::string& file, int line, const std::string& keyPath, const std::string& message);
+
+    const std::string& file() const { return file_; }
+    int line() const { return line_; }                       //!< 1-based; 0 when unknown
+    const std::string& keyPath() const { return keyPath_; }  //!< e.g. "transmitters[1].channel"
+    const std::string& message() const { return message_; }
+
+private:
+    std::string file_, keyPath_, message_;
+    int line_ = 0;
+};
+
+/** A reflecting wall segment (2-D, world frame). */
+struct Wall
+{
+    std::string name;
+    mrpt::math::TPoint2D from, to;
+    /** Complex amplitude reflection coefficient (|Γ| ≤ 1). */
+    std::complex<double> reflection{-0.5, 0.0};
+    /** Loss of a ray that crosses the wall instead of reflecting on it [dB]. */
+    double transmissionLoss_dB = 12.0;
+};
+
+/** A thin obstacle that attenuates every ray crossing it and reflects nothing (a shelf,
+ *  a person, a cabinet seen edge-on). */
+struct Obstacle
+{
+    std::string name;
+    mrpt::math::TPoint2D from, to;
+    double attenuation_dB = 10.0;
+};
+
+/** An isotropic point scatterer (a pillar, a machine): bistatic radar cross-section. */
+struct Scatterer
+{
+    std::string name;
+    mrpt::math::TPoint2D position;
+    double radarCrossSection_m2 = 1.0;
+    double phase_rad = 0.0;  //!< extra phase of the scattered wave
+};
+
+/** A device whose frames the robot overhears (access point, IoT device, phone). */
+struct TransmitterSpec
+{
+    std::string name;
+    MacAddress mac;
+    mrpt::math::TPose2D pose;  //!< array origin and boresight (yaw) in the world frame
+    Chanspec chanspec;
+    unsigned streams = 1;  //!< spatial streams; stream m leaves from array element m
+    AntennaArray array = AntennaArray::singleElement();
+    double frameRate_Hz = 100.0;
+    double txPower_dBm = 20.0;
+    double antennaGain_dBi = 2.0;
+    uint16_t firstSequenceNumber = 0;  //!< 802.11 sequence number of frame 0
+};
+
+/** The robot's receiver: array, where it sits on the robot, front-end noise. */
+struct ReceiverSpec
+{
+    std::string sensorLabel = "WIFI_CSI";
+    AntennaArray array;
+    /** Array pose on the robot; the simulation is planar and uses x, y, yaw (z is kept). */
+    mrpt::poses::CPose3D sensorPose;
+    double noiseFigure_dB = 7.0;
+    double antennaGain_dBi = 2.0;
+    uint16_t chipId = 0x006a;  //!< BCM4366c0
+};
+
+enum class MotionType : uint8_t
+{
+    Static,     //!< stays at the start pose
+    Waypoints,  //!< drives through the waypoints once, then stops
+    Loop,       //!< drives through the waypoints cyclically
+    RandomWalk  //!< drives to random goals within a disc
+};
+const char* toString(MotionType t);
+
+struct MotionSpec
+{
+    MotionType type = MotionType::Static;
+    mrpt::math::TPose2D start;  //!< world frame, yaw in radians
+    std::vector<mrpt::math::TPoint2D> waypoints;
+    double speed_mps = 0.5;
+    double turnRate_radps = 1.0;  //!< maximum |ω|
+    double goalTolerance_m = 0.1;
+    mrpt::math::TPoint2D randomWalkCenter;  //!< defaults to the start position
+    double randomWalkRadius_m = 5.0;
+    double timeStep_s = 0.01;  //!< integration step of the ground truth
+};
+
+/** Wheel odometry error model. Per step of length d [m] and rotation Δθ [rad] the reported
+ *  increment is: forward ·(1+scaleError) + N(0, σ_xy²·d), lateral + N(0, σ_xy²·d),
+ *  Δθ·(1+yawScaleError) + yawDrift·d + N(0, σ_yaw²·d + σ_yawRot²·|Δθ|). */
+struct OdometrySpec
+{
+    bool enabled = true;
+    std::string sensorLabel = "ODOMETRY";
+    double rate_Hz = 20.0;
+    double sigmaXY_m_per_sqrt_m = 0.01;
+    double sigmaYaw_rad_per_sqrt_m = 0.005;
+    double sigmaYaw_rad_per_sqrt_rad = 0.01;
+    double scaleError = 0.0;
+    double yawScaleError = 0.0;
+    double yawDrift_rad_per_m = 0.0;
+    bool startAtOrigin = true;  //!< odometry frame starts at (0,0,0), as on a real robot
+};
+
+/** Hardware impairments, each reproducible from the scenario seed (DESIGN.md §5). */
+struct ImpairmentSpec
+{
+    // Fixed per boot, per channel, per receive chain: what calibration must recover.
+    bool antennaPhaseOffsets = true;    //!< uniform in [−π, π) per chain and channel
+    double antennaGainSigma_dB = 0.5;   //!< per chain gain mismatch
+    double rippleAmplitude_rad = 0.08;  //!< RMS of the smooth per-subcarrier phase ripple
+    unsigned rippleComponents = 3;      //!< cosine terms across the band
+
+    // Per packet.
+    double samplingTimeOffsetSigma_s = 25e-9;  //!< linear phase across subcarriers (all chains)
+    bool cfoCommonPhase = true;                //!< uniform common phase per packet
+    double agcTarget = 1.0;            //!< RMS CSI magnitude the AGC aims at (hardware units)
+    double agcSigma_dB = 1.0;          //!< packet-to-packet gain jitter, common to all chains
+    double agcPerChainSigma_dB = 0.3;  //!< extra per chain
+    double rssiSigma_dB = 1.0;
+    bool awgn = true;  //!< receiver noise at the link budget's SNR
+    /** Best SNR a real receiver's channel estimate reaches (EVM, phase noise, quantisation):
+     *  combined with the link budget's as 1/SNR = 1/SNR_thermal + 1/SNR_cap. */
+    double snrCap_dB = 35.0;
+    std::optional<double> fixedSnr_dB;  //!< overrides the link budget's SNR when set
+    double timingJitter = 0.3;          //!< frame time jitter, fraction of the frame period (< 1)
+
+    // 4366c0 inter-antenna jump states: each chain except 0 sits in one of `jumpStates`
+    // delay states (0, step, 2·step, ...), switching at random (Poisson) times.
+    bool antennaJumps = false;
+    unsigned jumpStates = 3;
+    double jumpStep_s = 3e-9;
+    double jumpRate_Hz = 0.2;
+
+    std::vector<unsigned> deadCores;      //!< receive chains that report nothing useful
+    bool deadCoresMissing = false;        //!< true: pairs absent; false: present but all zero
+    bool firmwareOverwrittenBins = true;  //!< PHY status words at k = 0,+1,+2 (28..30 @20 MHz)
+    bool lowerSubbandSignFlip = true;     //!< 80 MHz: k = −128..−65 arrive negated (§4)
+
+    /** No impairment at all: the CSI is the propagation channel, scaled, without noise. */
+    static ImpairmentSpec ideal();
+};
+
+struct PropagationSpec
+{
+    unsigned maxReflectionOrder = 2;  //!< 0, 1 or 2 (image method)
+    double minPathGain_dB = -40.0;    //!< paths weaker than this vs. the strongest are dropped
+};
+
+/** Everything the simulator needs, normally loaded from a YAML file (share/scenarios/README.md
+ *  documents every key). */
+struct Scenario
+{
+    std::string name;
+    std::string description;
+    std::string sourcePath;  //!< file it was read from ("" if from text)
+    double duration_s = 60.0;
+    uint32_t seed = 1;
+    double startTime_unix = 1700000000.0;  //!< timestamp of t = 0
+
+    std::vector<mrpt::math::TPoint2D> roomCorners;  //!< empty: open space (no room walls)
+    std::vector<Wall> walls;                        //!< room edges first, then extra walls
+    std::vector<Obstacle> obstacles;
+    std::vector<Scatterer> scatterers;
+    std::vector<TransmitterSpec> transmitters;
+    ReceiverSpec receiver;
+    MotionSpec motion;
+    OdometrySpec odometry;
+    ImpairmentSpec impairments;
+    PropagationSpec propagation;
+
+    /** Reads a scenario file; antenna array files are resolved relative to it.
+     *  Throws ScenarioError naming file, line and key for unknown keys, bad values, a
+     *  transmitter outside the room, an impossible channel... */
+    static Scenario fromYamlFile(const std::string& path);
+
+    /** As fromYamlFile() for a YAML text; `displayName` is used in messages and `baseDir` to
+     *  resolve relative array paths. */
+    static Scenario fromYamlText(
+        const std::string& text, const std::string& displayName = "<text>",
+        const std::string& baseDir = ".");
+
+    /** Cross-checks a scenario built in code (the YAML reader runs it too): transmitters and
+     *  motion inside the room, arrays large enough for the streams, unique names/MACs...
+     *  Throws ScenarioError with the key path of the offending entry (line 0). */
+    void validate() const;
+
+    /** True if the point is inside the room polygon (always true in open space). */
+    bool insideRoom(const mrpt::math::TPoint2D& p) const;
+
+    /** Index of a transmitter by name or MAC text; throws std::out_of_range if none. */
+    size_t transmitterIndex(const std::string& nameOrMac) const;
+};
+
+}  // namespace mrpt_wifi::sim

@@ -1,0 +1,230 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * Scenario files: the samples in share/ load and simulate; bad input is reported with the file,
+ * line and key. */
+#include <gtest/gtest.h>
+#include <mrpt/system/CDirectoryExplorer.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/sim/Simulator.h>
+
+#include <fstream>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::sim;
+
+namespace
+{
+const std::string kShare = std::string(MRPT_WIFI_SOURCE_DIR) + "/share";
+
+// A small valid scenario; tests break one thing at a time. Line numbers matter below.
+const std::string kValid = R"(name: test
+duration_s: 2
+seed: 3
+room:
+  corners: [[0, 0], [10, 0], [10, 5], [0, 5]]
+transmitters:
+  - name: a
+    mac: '02:00:00:00:00:01'
+    position: [1, 1]
+    channel: 155/80
+  - name: b
+    mac: '02:00:00:00:00:02'
+    position: [9, 4]
+    channel: 36/20
+receiver:
+  array:
+    elements: [[0, 0], [0, 0.026]]
+motion:
+  type: waypoints
+  start: [5, 2.5, 90]
+  waypoints: [[6, 3]]
+)";
+
+std::string replaced(std::string text, const std::string& from, const std::string& to)
+{
+    const auto pos = text.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    if (pos != std::string::npos) text.replace(pos, from.size(), to);
+    return text;
+}
+
+/** Loads a text expected to fail; returns the error. */
+ScenarioError loadError(const std::string& text)
+{
+    try
+    {
+        Scenario::fromYamlText(text, "bad.yaml", kShare + "/scenarios");
+    }
+    catch (const ScenarioError& e)
+    {
+        return e;
+    }
+    ADD_FAILURE() << "no error for:\n" << text;
+    return ScenarioError("", 0, "", "");
+}
+}  // namespace
+
+TEST(Scenario, ValidTextLoads)
+{
+    const Scenario sc = Scenario::fromYamlText(kValid, "ok.yaml");
+    EXPECT_EQ(sc.name, "test");
+    ASSERT_EQ(sc.transmitters.size(), 2u);
+    EXPECT_EQ(sc.transmitters[1].chanspec, Chanspec::make(36, 20));
+    EXPECT_EQ(sc.transmitters[0].mac.asString(), "02:00:00:00:00:01");
+    EXPECT_EQ(sc.walls.size(), 4u);
+    EXPECT_EQ(sc.receiver.array.size(), 2u);
+    EXPECT_NEAR(sc.motion.start.phi, M_PI / 2, 1e-12);
+    EXPECT_EQ(sc.motion.type, MotionType::Waypoints);
+}
+
+TEST(Scenario, RtAc86uArrayFileHasTheDesignGeometry)
+{
+    const auto a = AntennaArray::fromYamlFile(kShare + "/arrays/rt-ac86u.yaml");
+    ASSERT_EQ(a.size(), 4u);
+    const double y[4] = {0.0, 0.052, 0.026, 0.078};
+    for (size_t i = 0; i < 4; ++i)
+    {
+        EXPECT_DOUBLE_EQ(a.elements[i].x, 0.0);
+        EXPECT_DOUBLE_EQ(a.elements[i].y, y[i]);
+    }
+    EXPECT_EQ(AntennaArray::fromYamlFile(kShare + "/arrays/square-2x2.yaml").size(), 4u);
+}
+
+TEST(Scenario, UnknownTopLevelKeyNamesKeyAndLine)
+{
+    const auto e = loadError(replaced(kValid, "seed: 3", "sede: 3"));
+    EXPECT_EQ(e.keyPath(), "sede");
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:3: sede: unknown key 'sede'"), std::string::npos)
+        << e.what();
+}
+
+TEST(Scenario, UnknownNestedKeyNamesKeyPathAndLine)
+{
+    const auto e = loadError(replaced(kValid, "    channel: 36/20", "    chanel: 36/20"));
+    EXPECT_EQ(e.keyPath(), "transmitters[1].chanel");
+    EXPECT_EQ(e.line(), 14);
+    EXPECT_NE(std::string(e.what()).find("allowed here"), std::string::npos);
+}
+
+TEST(Scenario, TransmitterOutsideTheRoom)
+{
+    const auto e = loadError(replaced(kValid, "position: [9, 4]", "position: [12, 4]"));
+    EXPECT_EQ(e.keyPath(), "transmitters[1].position");
+    EXPECT_EQ(e.line(), 13);
+    EXPECT_NE(std::string(e.what()).find("outside the room"), std::string::npos) << e.what();
+}
+
+TEST(Scenario, ImpossibleChannels)
+{
+    for (const char* ch : {"200/80", "6/80", "36/160", "abc", "155/"})
+    {
+        const auto e =
+            loadError(replaced(kValid, "channel: 155/80", std::string("channel: ") + ch));
+        EXPECT_EQ(e.keyPath(), "transmitters[0].channel") << ch;
+        EXPECT_EQ(e.line(), 10) << ch;
+        EXPECT_NE(std::string(e.what()).find("impossible channel"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Scenario, BadValuesNameTheirKey)
+{
+    auto e = loadError(replaced(kValid, "duration_s: 2", "duration_s: two"));
+    EXPECT_EQ(e.keyPath(), "duration_s");
+    EXPECT_EQ(e.line(), 2);
+    e = loadError(replaced(kValid, "duration_s: 2", "duration_s: -1"));
+    EXPECT_EQ(e.keyPath(), "duration_s");
+    EXPECT_EQ(e.line(), 2);
+    e = loadError(replaced(kValid, "'02:00:00:00:00:02'", "'02:00:00:00:00'"));
+    EXPECT_EQ(e.keyPath(), "transmitters[1].mac");
+    e = loadError(replaced(kValid, "'02:00:00:00:00:02'", "'02:00:00:00:00:01'"));
+    EXPECT_EQ(e.keyPath(), "transmitters[1].mac");
+    EXPECT_NE(std::string(e.what()).find("duplicate"), std::string::npos);
+    e = loadError(replaced(kValid, "waypoints: [[6, 3]]", "waypoints: [[6, 30]]"));
+    EXPECT_EQ(e.keyPath(), "motion.waypoints[0]");
+    EXPECT_EQ(e.line(), 21);
+    e = loadError(replaced(
+        kValid, "motion:", "obstacles:\n  - {name: crate, from: [5.5, 2], to: [5.5, 4]}\nmotion:"));
+    EXPECT_EQ(e.keyPath(), "motion.waypoints[0]");  // start → waypoint 0 crosses the crate
+    EXPECT_NE(std::string(e.what()).find("crosses obstacle 'crate'"), std::string::npos);
+    e = loadError(replaced(kValid, "type: waypoints", "type: teleport"));
+    EXPECT_EQ(e.keyPath(), "motion.type");
+    e = loadError(replaced(kValid, "name: b\n", "name: b\n    streams: 2\n"));
+    EXPECT_EQ(e.keyPath(), "transmitters[1].array");  // 2 streams need 2 elements
+}
+
+TEST(Scenario, MissingRequiredKeyAndMissingArrayFile)
+{
+    auto e = loadError(replaced(kValid, "    mac: '02:00:00:00:00:01'\n", ""));
+    EXPECT_EQ(e.keyPath(), "transmitters[0]");
+    EXPECT_NE(std::string(e.what()).find("missing required key 'mac'"), std::string::npos);
+    e = loadError(replaced(
+        kValid, "  array:\n    elements: [[0, 0], [0, 0.026]]", "  array: ../arrays/nope.yaml"));
+    EXPECT_EQ(e.keyPath(), "receiver.array");
+    EXPECT_EQ(e.line(), 16);
+    EXPECT_NE(std::string(e.what()).find("nope.yaml"), std::string::npos);
+}
+
+TEST(Scenario, YamlSyntaxErrorNamesTheFile)
+{
+    const auto e = loadError("name: [unclosed\nseed: 1\n");
+    EXPECT_EQ(e.file(), "bad.yaml");
+}
+
+TEST(Scenario, FromFileReportsTheFileName)
+{
+    const std::string path = mrpt::system::getTempFileName() + ".yaml";
+    std::ofstream(path) << replaced(kValid, "seed: 3", "seed: 3\nbogus: 1");
+    try
+    {
+        Scenario::fromYamlFile(path);
+        FAIL() << "no error";
+    }
+    catch (const ScenarioError& e)
+    {
+        EXPECT_EQ(e.file(), path);
+        EXPECT_EQ(e.line(), 4);
+        EXPECT_NE(std::string(e.what()).find(path + ":4: bogus"), std::string::npos) << e.what();
+    }
+    mrpt::system::deleteFile(path);
+    EXPECT_THROW(Scenario::fromYamlFile("/nonexistent/scenario.yaml"), ScenarioError);
+}
+
+// Every sample in share/scenarios loads and simulates a few seconds with frames from every
+// transmitter and odometry.
+TEST(Scenario, SampleScenariosLoadAndSimulate)
+{
+    const std::vector<std::string> names{"calibration", "bearing", "kidnapped", "iot", "loop"};
+    for (const auto& name : names)
+    {
+        SCOPED_TRACE(name);
+        Scenario sc = Scenario::fromYamlFile(kShare + "/scenarios/" + name + ".yaml");
+        EXPECT_EQ(sc.name, name);
+        sc.duration_s = 2.0;
+        Simulator sim(sc);
+        std::vector<unsigned> frames(sc.transmitters.size(), 0);
+        unsigned odometry = 0;
+        SimEvent ev;
+        while (sim.next(ev))
+        {
+            if (ev.kind == SimEvent::Kind::Odometry)
+                ++odometry;
+            else
+            {
+                ++frames[ev.frame.transmitterIndex];
+                ASSERT_TRUE(ev.csi->isComplete());
+                EXPECT_GT(ev.frame.snr_dB, 0.0);
+            }
+        }
+        for (size_t i = 0; i < frames.size(); ++i)
+            EXPECT_NEAR(frames[i], 2.0 * sc.transmitters[i].frameRate_Hz, 1.0) << i;
+        EXPECT_EQ(odometry, unsigned(2.0 * sc.odometry.rate_Hz) + 1);
+    }
+    // ... and nothing else is lying there untested.
+    const auto files =
+        mrpt::system::CDirectoryExplorer::explore(kShare + "/scenarios", FILE_ATTRIB_ARCHIVE);
+    unsigned yamls = 0;
+    for (const auto& f : files)
+        yamls += f.name.size() > 5 && f.name.substr(f.name.size() - 5) == ".yaml";
+    EXPECT_EQ(yamls, names.size());
+}
