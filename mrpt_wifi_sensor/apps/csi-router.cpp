@@ -26,7 +26,7 @@ std::optional<double> waitFirstFrame(
         options,
         [&](CObservationWiFiCSI::Ptr&& f)
         {
-            if (!downtime && f->chanspec == target)
+            if (!downtime && f->chanspec.sameChannel(target))
                 downtime = std::chrono::duration<double>(f->timestamp - start).count();
         });
     const auto deadline =
@@ -141,7 +141,13 @@ int main(int argc, char** argv)
                 else
                     needArgs(0, "configure");
                 std::unique_ptr<UdpCsiReceiver> rx;
-                if (argMeasure.isSet()) rx = std::make_unique<UdpCsiReceiver>(s.udp);
+                if (argMeasure.isSet())
+                {
+                    rx = std::make_unique<UdpCsiReceiver>(s.udp);
+                    // Connect first: the downtime runs from the switch command, as in the
+                    // driver, whose session is always open.
+                    router.shell().run("true", s.setup.commandTimeout_s);
+                }
                 const auto start = mrpt::Clock::now();
                 router.configure(s.extraction);
                 const double commandTime =

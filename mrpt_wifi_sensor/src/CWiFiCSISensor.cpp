@@ -208,7 +208,7 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
             return;
         }
         ++counters_.framesDelivered;
-        if (switchTarget_ && frame->chanspec == *switchTarget_)
+        if (switchTarget_ && frame->chanspec.sameChannel(*switchTarget_))
         {
             measured = secondsBetween(switchRequested_, frame->timestamp);
             lastSwitchDowntime_ = measured;

@@ -41,7 +41,7 @@ const std::set<std::string>& knownKeys()
         // control path: WiROS's 'login', 'channel', 'packet', 'setup' groups
         "router_control", "login_host", "login_port", "login_user", "login_identity_file",
         "login_known_hosts", "login_accept_new_host_key", "login_password_env", "login_askpass",
-        "login_connect_timeout", "ssh_multiplex", "command_timeout", "setup_load_module",
+        "login_connect_timeout", "ssh_persistent_session", "command_timeout", "setup_load_module",
         "setup_module_path", "setup_bridge", "setup_interface_5g", "setup_interface_2g4", "channel",
         "packet_mac_filter", "packet_delay", "packet_first_byte",
         // transmitter mode
@@ -151,7 +151,7 @@ CsiSensorSettings loadCsiSensorSettings(
         s.ssh.passwordEnvVar = str("login_password_env", "");
         s.ssh.askpassProgram = str("login_askpass", "");
         s.ssh.connectTimeout_s = c.read_double(section, "login_connect_timeout", 5.0);
-        s.ssh.multiplex = c.read_bool(section, "ssh_multiplex", true);
+        s.ssh.persistentSession = c.read_bool(section, "ssh_persistent_session", true);
         s.setup.commandTimeout_s = c.read_double(section, "command_timeout", 10.0);
         s.loadModule = c.read_bool(section, "setup_load_module", true);
         s.setup.modulePath = str("setup_module_path", s.setup.modulePath);

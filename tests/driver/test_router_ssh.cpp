@@ -39,17 +39,17 @@ TEST(RouterSsh, RunsCommandsWithKeyAuth)
 {
     test::SshdFixture sshd;
     MRPT_WIFI_REQUIRE_SSHD(sshd);
-    for (bool multiplex : {false, true})
+    for (bool persistent : {false, true})
     {
         auto o = optionsFor(sshd);
-        o.multiplex = multiplex;
+        o.persistentSession = persistent;
         SshRouterShell shell(o);
         EXPECT_EQ(shell.run("echo hello; echo world", 10), "hello\nworld\n");
-        // A second command reuses the connection when multiplexing.
+        // A second command reuses the session when persistent.
         const auto t0 = std::chrono::steady_clock::now();
         EXPECT_EQ(shell.run("echo again", 10), "again\n");
         RecordProperty(
-            multiplex ? "second_command_ms_multiplexed" : "second_command_ms",
+            persistent ? "second_command_ms_persistent_session" : "second_command_ms",
             int(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                     .count()));
     }

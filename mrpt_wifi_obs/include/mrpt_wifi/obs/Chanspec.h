@@ -51,6 +51,12 @@ struct Chanspec
     static std::optional<Chanspec> fromControlChannel(
         unsigned controlChannel, unsigned bandwidthMHz);
 
+    /** Same radio channel: center, bandwidth and band (the control sideband may differ: the
+     * receiver's and a transmitter's chanspec of one channel can name different primaries). */
+    bool sameChannel(const Chanspec& o) const
+    {
+        return centerChannel == o.centerChannel && bandwidthMHz == o.bandwidthMHz && band == o.band;
+    }
     bool operator==(const Chanspec& o) const { return raw == o.raw; }
     bool operator!=(const Chanspec& o) const { return raw != o.raw; }
 };

@@ -3,6 +3,7 @@
 
 #include <mrpt_wifi/sensor/Subprocess.h>
 
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -62,8 +63,10 @@ struct SshOptions
     std::string passwordEnvVar;
     std::string askpassProgram;  //!< empty: mrpt-wifi-askpass beside the library, else PATH
     double connectTimeout_s = 5.0;
-    /** Reuse one authenticated connection (ControlMaster) so a command costs one round trip. */
-    bool multiplex = true;
+    /** Keep one remote shell open and send every command to it: a command then costs a
+     * round trip through an existing session (milliseconds), not a new ssh channel and shell
+     * (hundreds of milliseconds) — what makes channel switches fast. */
+    bool persistentSession = true;
     std::string sshProgram = "ssh";
 };
 
@@ -79,8 +82,12 @@ public:
     std::vector<std::string> sshArgv(const std::string& command) const;
 
 private:
+    struct Session;
     SshOptions options_;
-    std::string controlDir_;
+    std::unique_ptr<Session> session_;
+    uint64_t commandCounter_ = 0;
+    std::map<std::string, std::string> askpassEnvironment() const;
+    std::string runInSession(const std::string& command, double timeout_s);
 };
 
 /** Classifies a failed ssh / remote command from its exit code and stderr. */

@@ -1,0 +1,302 @@
+// End to end with real parts: Debian's rawlog-grabber loads libmrpt_wifi_sensor.so with a
+// share/ config, configures the emulated RT-AC86U through a real sshd on 127.0.0.1 (the
+// emulator's wl / nexutil / makecsiparams shims are the remote commands), and records the CSI
+// the emulator sends to 127.0.0.1.
+#include <gtest/gtest.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/CObservationWiFiScan.h>
+#include <mrpt_wifi/sensor/CsiFileReader.h>
+
+#include <map>
+#include <regex>
+#include <sstream>
+
+#include "EmulatorProcess.h"
+#include "SshdFixture.h"
+
+using namespace mrpt_wifi;
+
+namespace
+{
+std::string scenario(const std::string& name)
+{
+    return test::sourceDir() + "/share/scenarios/" + name + ".yaml";
+}
+
+/** A share/rawlog-grabber config with some keys set to test values (others untouched). */
+std::string deriveIni(
+    const std::string& shareIni, const std::map<std::string, std::string>& keys,
+    const std::string& out)
+{
+    std::istringstream in(test::readFile(test::sourceDir() + "/share/rawlog-grabber/" + shareIni));
+    std::ostringstream o;
+    auto pending = keys;
+    std::string section;
+    for (std::string line; std::getline(in, line);)
+    {
+        if (!line.empty() && line[0] == '[') section = line;
+        const auto eq = line.find('=');
+        if (eq != std::string::npos && line[0] != ';' && line[0] != '#')
+        {
+            std::string key = line.substr(0, eq);
+            key.erase(key.find_last_not_of(" \t") + 1);
+            if (auto it = pending.find(key); it != pending.end() && section != "[ODOMETRY]")
+            {
+                o << key << " = " << it->second << "\n";
+                pending.erase(it);
+                continue;
+            }
+        }
+        o << line << "\n";
+    }
+    for (const auto& [k, v] : pending) o << k << " = " << v << "\n";  // the CSI section is last
+    std::ofstream(out) << o.str();
+    return out;
+}
+
+struct Recording
+{
+    std::vector<CObservationWiFiCSI::Ptr> frames;
+    std::vector<CObservationWiFiScan::Ptr> scans;
+    std::string log;
+    int exitCode = -1;
+};
+
+/** Runs rawlog-grabber for `seconds`, then stops it the way a user does (a key on stdin). */
+Recording runGrabber(const test::TempDir& tmp, const std::string& ini, double seconds)
+{
+    Recording r;
+    char cmd[1024];
+    std::snprintf(
+        cmd, sizeof(cmd),
+        "cd %s && (sleep %.1f; echo) | timeout 120 rawlog-grabber -p %s/libmrpt_wifi_sensor.so %s",
+        tmp.path().c_str(), seconds, test::libDir().c_str(), ini.c_str());
+    const auto res = test::run(cmd);
+    r.exitCode = res.exitCode;
+    r.log = res.output;
+    for (const auto& entry : std::filesystem::directory_iterator(tmp.path()))
+    {
+        if (entry.path().extension() != ".rawlog") continue;
+        mrpt::io::CFileGZInputStream f(entry.path().string());
+        auto arch = mrpt::serialization::archiveFrom(f);
+        for (;;)
+        {
+            mrpt::serialization::CSerializable::Ptr obj;
+            try
+            {
+                arch >> obj;
+            }
+            catch (const std::exception&)
+            {
+                break;  // end of file
+            }
+            if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
+                r.frames.push_back(csi);
+            if (auto scan = std::dynamic_pointer_cast<CObservationWiFiScan>(obj))
+                r.scans.push_back(scan);
+        }
+    }
+    return r;
+}
+
+std::map<std::string, std::string> sshKeys(const test::SshdFixture& sshd)
+{
+    return {
+        {"login_host", "127.0.0.1"},
+        {"login_port", std::to_string(sshd.port())},
+        {"login_user", sshd.user()},
+        {"login_identity_file", sshd.clientKey()},
+        {"login_known_hosts", sshd.knownHosts()},
+        {"router_address", "127.0.0.1"},
+        {"udp_bind_address", "127.0.0.1"},
+        {"status_period", "1"}};
+}
+}  // namespace
+
+TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu({"--scenario", scenario("kidnapped"), "--seed", "3"}, port, 60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    test::SshdFixture sshd(emu.toolsDir());
+    MRPT_WIFI_REQUIRE_SSHD(sshd);
+
+    auto keys = sshKeys(sshd);
+    keys["udp_port"] = std::to_string(port);
+    keys["channel"] = "155/80";
+    keys["rawlog_prefix"] = "rec";
+    const auto ini = deriveIni("csi_receiver.ini", keys, tmp.file("grab.ini"));
+    const auto rec = runGrabber(tmp, ini, 6.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    EXPECT_NE(rec.log.find("router configured: CSI on 155/80"), std::string::npos) << rec.log;
+
+    // 4 APs x 100 frames/s for ~5 s once configured: at least 1,200 frames, all on 155/80,
+    // all complete (no loss was injected), all four transmitters.
+    ASSERT_GT(rec.frames.size(), 1200u)
+        << rec.log.substr(rec.log.size() > 4000 ? rec.log.size() - 4000 : 0);
+    std::map<std::string, size_t> perTx;
+    size_t incomplete = 0;
+    for (const auto& f : rec.frames)
+    {
+        ASSERT_EQ(f->chanspec.centerChannel, 155);
+        ASSERT_EQ(f->chanspec.bandwidthMHz, 80);
+        ASSERT_EQ(f->sensorLabel, "WIFI_CSI");
+        incomplete += !f->isComplete();
+        ++perTx[f->transmitter.asString()];
+        EXPECT_EQ(f->nTx, 4);
+    }
+    EXPECT_EQ(perTx.size(), 4u);
+    EXPECT_EQ(incomplete, 0u);
+    // The pose from the .ini (pose_x = 0.10, pose_z = 0.40).
+    EXPECT_NEAR(rec.frames.front()->sensorPose.x(), 0.10, 1e-9);
+    EXPECT_NEAR(rec.frames.front()->sensorPose.z(), 0.40, 1e-9);
+}
+
+TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu(
+        {"--scenario", scenario("kidnapped"), "--seed", "5", "--loss", "0.02", "--corrupt", "0.02",
+         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80"},
+        port, 60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    // No router control here: a receiver that only listens (preconfigured router).
+    const auto ini = deriveIni(
+        "csi_receiver.ini",
+        {{"router_control", "false"},
+         {"udp_port", std::to_string(port)},
+         {"udp_bind_address", "127.0.0.1"},
+         {"router_address", "127.0.0.1"},
+         {"status_period", "1"},
+         {"rawlog_prefix", "lossy"}},
+        tmp.file("grab.ini"));
+    const auto rec = runGrabber(tmp, ini, 4.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    ASSERT_GT(rec.frames.size(), 800u);
+    size_t incomplete = 0;
+    for (const auto& f : rec.frames) incomplete += !f->isComplete();
+    // 2% datagram loss on 16-datagram frames: ~28% of frames miss a pair; corruption adds more.
+    const double fraction = double(incomplete) / double(rec.frames.size());
+    EXPECT_GT(fraction, 0.15);
+    EXPECT_LT(fraction, 0.65);
+    // The status lines count what was rejected, duplicated and reordered.
+    EXPECT_TRUE(std::regex_search(rec.log, std::regex("rejected [1-9][0-9]*")))
+        << rec.log.substr(0, 3000);
+    EXPECT_TRUE(std::regex_search(rec.log, std::regex("duplicates [1-9][0-9]*")));
+}
+
+TEST(GrabberEmulator, WrongKeyOrUnreachableRouterIsAClearErrorNotAHang)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu({"--scenario", scenario("kidnapped")}, port, 60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    test::SshdFixture sshd(emu.toolsDir());
+    MRPT_WIFI_REQUIRE_SSHD(sshd);
+
+    auto keys = sshKeys(sshd);
+    keys["udp_port"] = std::to_string(port);
+    keys["login_identity_file"] = sshd.otherKey();  // not authorised on the router
+    keys["rawlog_prefix"] = "wrongkey";
+    const auto t0 = std::chrono::steady_clock::now();
+    auto rec = runGrabber(tmp, deriveIni("csi_receiver.ini", keys, tmp.file("a.ini")), 3.0);
+    EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30));
+    EXPECT_NE(rec.log.find("authentication failed"), std::string::npos) << rec.log;
+
+    keys["login_identity_file"] = sshd.clientKey();
+    keys["login_port"] = std::to_string(test::freeLoopbackPort());  // nobody there
+    keys["login_connect_timeout"] = "2";
+    keys["rawlog_prefix"] = "unreachable";
+    rec = runGrabber(tmp, deriveIni("csi_receiver.ini", keys, tmp.file("b.ini")), 3.0);
+    EXPECT_NE(rec.log.find("router unreachable"), std::string::npos) << rec.log;
+}
+
+TEST(GrabberEmulator, AutomaticModeSwitchesOnceWhenTheRobotRoams)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    // 120 simulated seconds at 8x: the robot drives from the west AP to the east AP.
+    test::EmulatorProcess emu(
+        {"--scenario", scenario("roaming"), "--speed", "8", "--scan-time", "0.2", "--retune-delay",
+         "0.02"},
+        port, 60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    test::SshdFixture sshd(emu.toolsDir());
+    MRPT_WIFI_REQUIRE_SSHD(sshd);
+    auto keys = sshKeys(sshd);
+    keys["udp_port"] = std::to_string(port);
+    keys["channel"] = "155/80";
+    keys["scan_period"] = "1";
+    keys["scan_wait"] = "0.3";
+    keys["auto_min_dwell_s"] = "2";
+    keys["rawlog_prefix"] = "auto";
+    const auto rec =
+        runGrabber(tmp, deriveIni("csi_auto_channel.ini", keys, tmp.file("auto.ini")), 14.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    // Locks onto the west AP first (the robot starts there), then switches exactly once.
+    const std::regex switchRe("channel switch to ([0-9]+/[0-9]+): (.*)");
+    std::vector<std::string> switches;
+    for (std::sregex_iterator it(rec.log.begin(), rec.log.end(), switchRe), end; it != end; ++it)
+        switches.push_back((*it)[1].str() + " | " + (*it)[2].str());
+    ASSERT_EQ(switches.size(), 2u)
+        << rec.log.substr(rec.log.size() > 6000 ? rec.log.size() - 6000 : 0);
+    EXPECT_EQ(switches[0].rfind("42/80 | initial lock", 0), 0u) << switches[0];
+    EXPECT_EQ(switches[1].rfind("155/80 |", 0), 0u) << switches[1];
+    EXPECT_FALSE(rec.scans.empty());
+    bool sawWest = false, sawEast = false;
+    for (const auto& f : rec.frames)
+    {
+        sawWest |= f->chanspec.centerChannel == 42;
+        sawEast |= f->chanspec.centerChannel == 155;
+    }
+    EXPECT_TRUE(sawWest && sawEast);
+    // The downtime of each switch is measured; target < 200 ms. (The first "first frame" line
+    // is the initial set-up, which includes connecting and loading the module.)
+    std::string lastDowntime;
+    const std::regex downtimeRe("first frame on 155/80 ([0-9]+) ms after the switch request");
+    for (std::sregex_iterator it(rec.log.begin(), rec.log.end(), downtimeRe), end; it != end; ++it)
+        lastDowntime = (*it)[1].str();
+    ASSERT_FALSE(lastDowntime.empty()) << rec.log;
+    EXPECT_LT(std::stoi(lastDowntime), 200);
+    ::testing::Test::RecordProperty("switch_downtime_ms", lastDowntime);
+}
+
+TEST(GrabberEmulator, CsiRouterSwitchMeasuresTheDowntime)
+{
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu(
+        {"--scenario", scenario("roaming"), "--preconfigured", "155/80"}, port, 60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    test::SshdFixture sshd(emu.toolsDir());
+    MRPT_WIFI_REQUIRE_SSHD(sshd);
+    const std::string base = test::binDir() + "/csi-router --host 127.0.0.1 --port " +
+                             std::to_string(sshd.port()) + " --user " + sshd.user() + " -i " +
+                             sshd.clientKey() + " --known-hosts " + sshd.knownHosts() + " ";
+    auto r = test::run(base + "status");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("channel 155/80"), std::string::npos) << r.output;
+    const std::string measure = " --measure --measure-timeout 3 --config " + test::sourceDir() +
+                                "/share/rawlog-grabber/csi_receiver.ini";
+    // csi_receiver.ini listens on 5500; point it at the emulator's port via a derived copy.
+    test::TempDir tmp;
+    const auto ini = deriveIni(
+        "csi_receiver.ini", {{"udp_port", std::to_string(port)}, {"udp_bind_address", "127.0.0.1"}},
+        tmp.file("r.ini"));
+    r = test::run(base + "switch 36/80 --measure --measure-timeout 3 --config " + ini);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(
+        r.output, m, std::regex("switch downtime \\(request -> first frame\\): ([0-9.]+) ms")))
+        << r.output;
+    EXPECT_LT(std::stod(m[1]), 200.0) << r.output;
+    ::testing::Test::RecordProperty("csi_router_switch_downtime_ms", m[1].str());
+    r = test::run(base + "status");
+    EXPECT_NE(r.output.find("channel 42/80"), std::string::npos) << r.output;
+    r = test::run(base + "scan");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("02:00:00:00:05:01"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("2 access points"), std::string::npos) << r.output;
+}
