@@ -9,6 +9,7 @@
 #include <cinttypes>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 
 using namespace mrpt_wifi;
@@ -66,7 +67,10 @@ int main(int argc, char** argv)
             TCLAP::UnlabeledValueArg<std::string> argIn(
                 "input", "Input capture or rawlog", true, "", "IN", cmd);
             TCLAP::ValueArg<std::string> argJsonl(
-                "", "jsonl", "Output JSON Lines file ('-' for stdout)", true, "", "OUT.jsonl", cmd);
+                "", "jsonl", "Output JSON Lines file ('-' for stdout)", false, "", "OUT.jsonl", cmd);
+            TCLAP::SwitchArg argStats(
+                "", "stats", "Instead of exporting: frames per transmitter and channel, complete and incomplete",
+                cmd);
             TCLAP::ValueArg<std::string> argFormat(
                 "f", "format", "Datagram header of captures: auto|nexmon|nexmon-legacy|ubilocate",
                 false, "auto", "FORMAT", cmd);
@@ -86,11 +90,24 @@ int main(int argc, char** argv)
             options.assembler.format = nexmon::formatHintFromString(argFormat.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
 
-            const bool toStdout = argJsonl.getValue() == "-";
+            if (argJsonl.isSet() == argStats.isSet())
+                throw std::invalid_argument("give exactly one of --jsonl OUT and --stats");
+            const bool toStdout = argStats.isSet() || argJsonl.getValue() == "-";
             std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(
                 toStdout ? stdout : std::fopen(argJsonl.getValue().c_str(), "w"),
                 toStdout ? [](std::FILE*) { return 0; } : &std::fclose);
             if (!file) throw std::runtime_error("cannot create '" + argJsonl.getValue() + "'");
+            struct Count
+            {
+                uint64_t complete = 0, incomplete = 0;
+            };
+            std::map<std::pair<std::string, std::string>, Count> counts;  // (MAC, channel)
+            const auto onFrame = [&](CObservationWiFiCSI::Ptr&& obs)
+            {
+                if (!argStats.isSet()) return writeJsonLine(file.get(), *obs);
+                auto& c = counts[{obs->transmitter.asString(), obs->chanspec.asString()}];
+                ++(obs->isComplete() ? c.complete : c.incomplete);
+            };
 
             cli::Progress progress("csi-export", !argQuiet.getValue() && !toStdout);
             CsiFileReadSummary summary;
@@ -99,7 +116,7 @@ int main(int argc, char** argv)
             {
                 readCsiFrames(
                     argIn.getValue(), options,
-                    [&](CObservationWiFiCSI::Ptr&& obs) { writeJsonLine(file.get(), *obs); },
+                    onFrame,
                     [&](double f) { progress.update(f); }, &summary);
                 progress.done(std::to_string(summary.frames) + " frames");
             }
@@ -110,6 +127,18 @@ int main(int argc, char** argv)
             }
             if (std::fflush(file.get()) != 0)
                 throw std::runtime_error("writing '" + argJsonl.getValue() + "' failed");
+            if (argStats.isSet())
+            {
+                std::printf("%-19s %-8s %10s %10s\n", "TRANSMITTER", "CHANNEL", "COMPLETE", "INCOMPLETE");
+                Count total;
+                for (const auto& [key, c] : counts)
+                {
+                    std::printf("%-19s %-8s %10" PRIu64 " %10" PRIu64 "\n", key.first.c_str(), key.second.c_str(), c.complete, c.incomplete);
+                    total.complete += c.complete;
+                    total.incomplete += c.incomplete;
+                }
+                std::printf("%-28s %10" PRIu64 " %10" PRIu64 "\n", "total", total.complete, total.incomplete);
+            }
             std::cerr << summary.asString() << "\n";
             return rc;
         });

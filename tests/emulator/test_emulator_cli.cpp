@@ -1,0 +1,235 @@
+// The real programs: rt-ac86u-emulator started as a process, driven through the links in
+// STATE_DIR/bin/ (the shim finds the socket from the link's own directory), stopped by
+// emulator-ctl or SIGTERM. Everything on 127.0.0.1, each run bounded by --duration.
+#include <gtest/gtest.h>
+#include <mrpt_wifi/emulator/CsiParams.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "EmulatorTestSupport.h"
+
+using namespace mrpt_wifi;
+using test::run;
+
+extern char** environ;
+
+namespace
+{
+const char* kScenarioYaml = R"(name: cli-test
+duration_s: 60
+seed: 3
+transmitters:
+  - {name: ap-a, mac: '02:aa:00:00:00:01', position: [4, 1], channel: 155/80, frame_rate_hz: 100}
+  - {name: ap-c, mac: '02:bb:00:00:00:04', position: [2, 3], channel: 42/80, frame_rate_hz: 100}
+receiver:
+  array: {name: rt-ac86u, elements: [[0, 0], [0, 0.052], [0, 0.026], [0, 0.078]]}
+motion: {type: static, start: [0, 0, 0]}
+odometry: {enabled: false}
+)";
+
+std::string emulatorProgram()
+{
+    return test::binDir() + "/rt-ac86u-emulator";
+}
+
+/** rt-ac86u-emulator as a child process, stdout/stderr to files. */
+class EmulatorProcess
+{
+public:
+    EmulatorProcess(const test::TempDir& tmp, const std::string& args) : tmp_(tmp)
+    {
+        const std::string cmd = "exec " + emulatorProgram() + " " + args + " > " +
+                                tmp.file("stdout.txt") + " 2> " + tmp.file("stderr.txt");
+        const char* argv[] = {"sh", "-c", cmd.c_str(), nullptr};
+        if (posix_spawnp(&pid_, "sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0)
+            pid_ = -1;
+    }
+    ~EmulatorProcess()
+    {
+        if (pid_ > 0 && !exited_)
+        {
+            ::kill(pid_, SIGKILL);
+            wait(5);
+        }
+    }
+    bool waitForSocket(const std::string& path, double max_s = 10)
+    {
+        const auto t0 = test::Clock::now();
+        while (test::secondsSince(t0) < max_s)
+        {
+            if (std::filesystem::exists(path)) return true;
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+        return false;
+    }
+    /** Exit code, or -1 if it doesn't end within max_s. */
+    int wait(double max_s)
+    {
+        const auto t0 = test::Clock::now();
+        while (test::secondsSince(t0) < max_s)
+        {
+            int status = 0;
+            if (::waitpid(pid_, &status, WNOHANG) == pid_)
+            {
+                exited_ = true;
+                return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+        return -1;
+    }
+    pid_t pid() const { return pid_; }
+    std::string out() const { return test::readFile(tmp_.file("stdout.txt")); }
+    std::string err() const { return test::readFile(tmp_.file("stderr.txt")); }
+
+private:
+    const test::TempDir& tmp_;
+    pid_t pid_ = -1;
+    bool exited_ = false;
+};
+
+std::string writeScenario(const test::TempDir& tmp)
+{
+    const std::string path = tmp.file("scenario.yaml");
+    std::ofstream(path) << kScenarioYaml;
+    return path;
+}
+
+/** A command as an sshd session would run it: no socket variable, PATH as given. */
+std::string shell(const std::string& command)
+{
+    return "env -u RT_AC86U_EMULATOR_SOCKET " + command;
+}
+}  // namespace
+
+TEST(EmulatorCli, HelpAndBadInputExitWithClearMessages)
+{
+    test::TempDir tmp;
+    const std::string scenario = writeScenario(tmp);
+    auto r = run(emulatorProgram() + " --help");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("--scenario"), std::string::npos);
+
+    for (const char* dest : {"192.168.1.10", "10.10.10.10", "255.255.255.255", "::ffff:127.0.0.1"})
+    {
+        r =
+            run(emulatorProgram() + " --scenario " + scenario + " --state-dir " + tmp.file("s") +
+                " --duration 1 --dest " + dest);
+        EXPECT_NE(r.exitCode, 0) << dest;
+        EXPECT_NE(r.output.find("loopback"), std::string::npos) << r.output;
+    }
+    r = run(emulatorProgram() + " --scenario " + tmp.file("missing.yaml") + " --duration 1");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("missing.yaml"), std::string::npos) << r.output;
+    r = run(emulatorProgram() + " --replay " + tmp.file("missing.pcap") + " --duration 1");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("missing.pcap"), std::string::npos) << r.output;
+    r = run(emulatorProgram() + " --scenario " + scenario + " --loss 1.5 --duration 1");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("loss"), std::string::npos) << r.output;
+    r = run(emulatorProgram() + " --scenario " + scenario + " --preconfigured 999/80 --duration 1");
+    EXPECT_NE(r.exitCode, 0);
+    r = run(emulatorProgram() + " --scenario " + scenario + " --format bogus --duration 1");
+    EXPECT_NE(r.exitCode, 0);
+}
+
+TEST(EmulatorCli, ShimLinksDriveTheRunningEmulator)
+{
+    test::TempDir tmp;
+    test::UdpReceiver rx;
+    const std::string state = tmp.file("state"), bin = state + "/bin/";
+    EmulatorProcess emu(
+        tmp, "--scenario " + writeScenario(tmp) + " --port " + std::to_string(rx.port()) +
+                 " --state-dir " + state + " --duration 20 --status-period 0");
+    ASSERT_TRUE(emu.waitForSocket(state + "/emulator.sock")) << emu.err();
+
+    // Through the link, socket found from the link's directory.
+    auto r = run(shell(bin + "wl -i eth6 chanspec 36/80"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    r = run(shell(bin + "wl -i eth6 chanspec"));
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_EQ(r.output, "36/80 (0xe02a)\n");  // control channel 36: centre 42
+    // As a shell running bare names through PATH (an sshd whose PATH starts with bin/).
+    r = run(shell("PATH=" + bin + ":/usr/bin:/bin wl -i eth6 chanspec"));
+    EXPECT_EQ(r.output, "36/80 (0xe02a)\n");
+    r = run(shell(bin + "emulator-ctl status"));
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_NE(
+        r.output.find("\"chanspec\": \"42/80\", \"chanspec_word\": \"0xe02a\""), std::string::npos)
+        << r.output;
+
+    // Errors keep their exit codes and stderr.
+    r = run(shell(bin + "wl -i eth6 frobnicate"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("wl: "), std::string::npos);
+    r = run(shell(bin + "nexutil -I eth6 -s500 -b -l34 -v AAAA"));
+    EXPECT_NE(r.exitCode, 0);
+    r = run(shell(bin + "makecsiparams -e 1 -c 155/80 -C 0xf -N 0xf -m 11:22:33:44:55:66 -d 0x50"));
+    EXPECT_EQ(r.exitCode, 0);
+    EXPECT_EQ(r.output, "m+AB/wAAAQARIjNEVWYAAAAAAAAAAAAAAAAAAAAAAABQAA==\n");
+    r = run(shell(bin + "makecsiparams -C 0x1f"));
+    EXPECT_NE(r.exitCode, 0);
+
+    // A full WiROS setup through the links makes CSI flow on loopback.
+    const std::string setup = bin + "rmmod dhd; " + bin + "insmod /jffs/csi/dhd.ko && " + bin +
+                              "brctl addif br0 eth6 && " + bin + "wl -i eth6 chanspec 155/80 && " +
+                              bin + "wl -i eth6 monitor 1 && " + bin +
+                              "nexutil -I eth6 -s500 -b -l34 -v $(" + bin +
+                              "makecsiparams -e 1 -c 155/80 -C 0xf -N 0xf)";
+    r = run(shell("sh -c '" + setup + "'"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));
+    EXPECT_GT(rx.count(), 50u);
+
+    // Transmitter mode as the driver runs it: a bounded beacon loop with BusyBox's usleep.
+    const std::vector<uint8_t> beacon(50, 0x80);
+    const std::string loop =
+        "wl -i eth6 5g_rate -v 0 -s 1 && (n=0; while [ $n -lt 5 ]; do nexutil -I eth6 -s505 -b "
+        "-l 50 -v " +
+        emulator::base64Encode(beacon.data(), beacon.size()) +
+        " || exit 1; usleep 2000; n=$((n+1)); done)";
+    r = run(shell("PATH=" + bin + ":/usr/bin:/bin sh -c '" + loop + "'"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    r = run(shell(bin + "emulator-ctl status"));
+    EXPECT_NE(r.output.find("\"rate\": \"-v 0 -s 1\", \"frames_injected\": 5"), std::string::npos)
+        << r.output;
+
+    r = run(shell(bin + "emulator-ctl stop"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(emu.wait(5), 0) << emu.err();
+    EXPECT_NE(emu.out().find("\"stop_reason\": \"stop requested\""), std::string::npos)
+        << emu.out();
+    EXPECT_TRUE(std::filesystem::exists(state + "/summary.json"));
+    // The emulator is gone: a shim now fails like ssh to an unreachable host.
+    r = run(shell(bin + "wl -i eth6 chanspec"));
+    EXPECT_EQ(r.exitCode, 255) << r.output;
+}
+
+TEST(EmulatorCli, SigtermStopsWithASummaryAndDurationBoundsTheRun)
+{
+    test::TempDir tmp;
+    test::UdpReceiver rx;
+    {
+        EmulatorProcess emu(
+            tmp, "--scenario " + writeScenario(tmp) + " --port " + std::to_string(rx.port()) +
+                     " --state-dir " + tmp.file("a") + " --preconfigured 155/80 --duration 20 -q");
+        ASSERT_TRUE(emu.waitForSocket(tmp.file("a") + "/emulator.sock"));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        ::kill(emu.pid(), SIGTERM);
+        EXPECT_EQ(emu.wait(5), 0);
+        EXPECT_NE(emu.out().find("\"datagrams_sent\": "), std::string::npos) << emu.out();
+        EXPECT_GT(test::jsonCounter(emu.out(), "datagrams_sent"), 20u);
+    }
+    const auto t0 = test::Clock::now();
+    const auto r =
+        run(emulatorProgram() + " --scenario " + writeScenario(tmp) + " --port " +
+            std::to_string(rx.port()) + " --state-dir " + tmp.file("b") +
+            " --preconfigured 155/80 --duration 0.5 -q");
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_LT(test::secondsSince(t0), 3.0);
+    EXPECT_NE(r.output.find("duration reached"), std::string::npos);
+}
