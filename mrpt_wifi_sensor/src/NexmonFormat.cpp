@@ -196,15 +196,28 @@ bool parseHeader(
 
 uint32_t packWord(std::complex<float> v)
 {
-    const float largest = std::max(std::abs(v.real()), std::abs(v.imag()));
+    // Bit arithmetic instead of ilogb/ldexp/lround: the emulator and the simulator's pcap
+    // output pack millions of words a second.
+    const float re = std::abs(v.real()), im = std::abs(v.imag());
+    const float largest = std::max(re, im);
     if (!(largest > 0.0f) || !std::isfinite(largest)) return 0;
-    // Smallest exponent whose mantissas fit in 11 bits: most precision for this value.
-    int e = std::ilogb(largest) - 10;
-    if (std::lround(std::ldexp(largest, -e)) > kMaxMantissa) ++e;
-    e = std::clamp(e, kMinExponent, kMaxExponent);
-    const auto mantissa = [e](float x)
-    { return uint32_t(std::min<long>(std::lround(std::ldexp(std::abs(x), -e)), kMaxMantissa)); };
-    const uint32_t mr = mantissa(v.real()), mi = mantissa(v.imag());
+    uint32_t bits;
+    std::memcpy(&bits, &largest, 4);
+    const int biased = int(bits >> 23);  // sign is 0
+    // floor(log2(largest)) for normal floats; subnormals are far below 2^-32 · 2^-10 anyway.
+    int e = std::clamp(biased - 127 - 10, kMinExponent, kMaxExponent);
+    const auto scaleFor = [](int exponent)
+    {
+        const uint32_t b = uint32_t(127 - exponent) << 23;  // 2^-exponent, exponent in [-32, 31]
+        float f;
+        std::memcpy(&f, &b, 4);
+        return f;
+    };
+    float scale = scaleFor(e);
+    if (largest * scale + 0.5f >= 2048.0f && e < kMaxExponent) scale = scaleFor(++e);
+    const auto mantissa = [](float x)
+    { return uint32_t(std::min(x + 0.5f, float(kMaxMantissa))); };  // x ≥ 0: round half up
+    const uint32_t mr = mantissa(re * scale), mi = mantissa(im * scale);
     uint32_t w = uint32_t(e) & 0x3F;
     w |= mi << kImagShift;
     w |= mr << kRealShift;

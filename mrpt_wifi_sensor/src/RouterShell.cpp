@@ -80,7 +80,9 @@ RouterErrorKind classifyRouterFailure(const SubprocessResult& r)
             return RouterErrorKind::AuthenticationFailed;
         return RouterErrorKind::Unreachable;
     }
-    if (r.exitCode == 127 || contains(e, "not found")) return RouterErrorKind::CommandMissing;
+    // POSIX shells exit 127 for a missing command; "wl: ... adapter not found" is not that.
+    if (r.exitCode == 127 || contains(e, "command not found"))
+        return RouterErrorKind::CommandMissing;
     if (contains(e, "ioctl") || contains(e, "Unsupported") || contains(e, "nexutil"))
         return RouterErrorKind::WrongFirmware;
     return RouterErrorKind::CommandFailed;
