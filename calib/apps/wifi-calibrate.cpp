@@ -1,0 +1,446 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * wifi-calibrate: phase calibration of the receive array from a rawlog recorded while the robot
+ * drove near a transmitter at a known position (or through a splitter), one YAML file per
+ * channel in the folder layout the estimators and the sensor load; --check tells whether an
+ * existing calibration still fits (e.g. after a router reboot). */
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt_wifi/calib/CalibrationCheck.h>
+#include <mrpt_wifi/calib/CalibrationInput.h>
+#include <mrpt_wifi/calib/CalibrationReport.h>
+#include <mrpt_wifi/calib/PhaseCalibrator.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::calib;
+
+namespace
+{
+constexpr double kDeg = 180.0 / M_PI;
+
+std::vector<double> numbers(const std::string& text, size_t count, const std::string& what)
+{
+    std::istringstream is(text);
+    std::vector<double> v;
+    double x;
+    while (is >> x) v.push_back(x);
+    if (v.size() != count || !is.eof())
+        throw std::invalid_argument(
+            what + ": expected " + std::to_string(count) + " numbers, got '" + text + "'");
+    return v;
+}
+
+std::string listMacs(const RawlogSummary& s)
+{
+    std::ostringstream o;
+    for (const auto& [mac, src] : s.transmitters)
+        o << "\n  " << mac.asString() << "  " << src.frames << " frames";
+    return o.str();
+}
+
+std::string fixed(double v, int p = 1)
+{
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(p) << v;
+    return o.str();
+}
+
+/** Circular mean [rad] of a phase curve. */
+double meanPhase(const std::vector<double>& p)
+{
+    std::complex<double> s = 0;
+    for (double v : p) s += std::polar(1.0, v);
+    return std::arg(s);
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return cli::runMain(
+        "wifi-calibrate",
+        [&]() -> int
+        {
+            TCLAP::CmdLine cmd(
+                "Phase calibration of a WiFi CSI receive array (per antenna and subcarrier) from "
+                "a rawlog recorded while the robot drove within a few metres of a transmitter at "
+                "a known position: expected bearings from the robot poses, suppression, "
+                "principal component, Levenberg-Marquardt refinement. Writes one YAML file per "
+                "channel as OUT/<device>/ch<centre>_<bw>mhz.yaml. Exit codes: 0 written/OK, "
+                "1 error, 2 a drive that cannot determine the calibration (nothing written, see "
+                "--force), 3 --check found the calibration stale.",
+                ' ', "0.1");
+            TCLAP::UnlabeledValueArg<std::string> argIn(
+                "input", "Rawlog with CObservationWiFiCSI (and odometry)", true, "", "IN.rawlog",
+                cmd);
+            TCLAP::ValueArg<std::string> argArray(
+                "a", "array", "Receive array geometry file (share/arrays/*.yaml)", true, "",
+                "ARRAY.yaml", cmd);
+            TCLAP::ValueArg<std::string> argTx(
+                "", "tx-position", "Transmitter position x y [m], in the frame of the poses", false,
+                "", "x y", cmd);
+            TCLAP::ValueArg<std::string> argTxFile(
+                "", "transmitters",
+                "YAML list of transmitters (mac, position) - e.g. wifi-sim's transmitters.yaml",
+                false, "", "FILE.yaml", cmd);
+            TCLAP::ValueArg<std::string> argMac(
+                "", "mac", "Use only frames from this transmitter", false, "", "MAC", cmd);
+            TCLAP::ValueArg<std::string> argPoses(
+                "", "poses",
+                "Robot poses: 'odometry' (CObservationOdometry in the rawlog) or a TUM "
+                "trajectory file (t x y z qx qy qz qw)",
+                false, "odometry", "odometry|FILE", cmd);
+            TCLAP::ValueArg<std::string> argOrigin(
+                "", "odom-origin",
+                "Pose of the odometry frame in the transmitter's frame: x y yaw (m, m, deg)", false,
+                "0 0 0", "x y yaw", cmd);
+            TCLAP::ValueArg<std::string> argChannel(
+                "c", "channel", "Only this channel (155/80, or Broadcom notation 149/80)", false,
+                "", "CH/BW", cmd);
+            TCLAP::ValueArg<double> argMinRssi(
+                "", "min-rssi", "Ignore frames weaker than this [dBm]", false, -127, "dBm", cmd);
+            TCLAP::ValueArg<std::string> argOut(
+                "o", "out", "Calibration folder (DIR/<device>/ch<c>_<bw>mhz.yaml)", false, "",
+                "DIR", cmd);
+            TCLAP::ValueArg<std::string> argReport(
+                "", "report", "Write report pictures (PNG) into this folder", false, "", "DIR",
+                cmd);
+            TCLAP::SwitchArg argForce(
+                "f", "force", "Write the calibration even if the drive cannot determine it", cmd);
+            TCLAP::SwitchArg argSplitter(
+                "", "static-splitter",
+                "Static calibration: one transmitter through a splitter and equal cables to "
+                "every antenna (no poses, no transmitter position)",
+                cmd);
+            TCLAP::ValueArg<std::string> argCheck(
+                "", "check",
+                "Do not calibrate: check whether this calibration (file or folder) still fits "
+                "the rawlog (stale after a reboot?)",
+                false, "", "CALIB", cmd);
+            TCLAP::ValueArg<double> argSegment(
+                "", "segment", "Seconds of frames per robust-loss segment", false, 0.5, "S", cmd);
+            TCLAP::ValueArg<double> argRobust(
+                "", "robust-scale", "Cauchy scale of the robust loss (0: least squares)", false,
+                0.3, "X", cmd);
+            TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
+
+            cli::JoinedArgv a1(argc, argv, "--tx-position", 2);
+            cli::JoinedArgv a2(a1.argc(), const_cast<char**>(a1.argv()), "--odom-origin", 3);
+            if (const int rc = cli::parseCommandLine(cmd, a2.argc(), a2.argv()); rc >= 0) return rc;
+
+            // ---- Arguments that need no data ------------------------------------------------
+            const bool splitter = argSplitter.isSet();
+            const bool checking = argCheck.isSet();
+            if (!checking && !argOut.isSet())
+                throw std::invalid_argument("--out DIR is required (or --check CALIB)");
+            if (!splitter && argTx.isSet() == argTxFile.isSet())
+                throw std::invalid_argument(
+                    "give the transmitter position with exactly one of --tx-position x y or "
+                    "--transmitters FILE (or use --static-splitter)");
+            const AntennaArray array = AntennaArray::fromYamlFile(argArray.getValue());
+            if (array.size() < 2)
+                throw std::invalid_argument(
+                    "the array '" + array.name + "' has one element: nothing to calibrate");
+            std::vector<TransmitterSite> sites;
+            if (argTx.isSet())
+            {
+                const auto v = numbers(argTx.getValue(), 2, "--tx-position");
+                sites.push_back({"tx", std::nullopt, {v[0], v[1]}});
+            }
+            else if (argTxFile.isSet())
+                sites = loadTransmitterSites(argTxFile.getValue());
+            std::optional<MacAddress> onlyMac;
+            if (argMac.isSet()) onlyMac = MacAddress::fromString(argMac.getValue());
+            std::optional<Chanspec> onlyChannel;
+            if (argChannel.isSet()) onlyChannel = Chanspec::fromString(argChannel.getValue());
+            const auto origin = numbers(argOrigin.getValue(), 3, "--odom-origin");
+            std::optional<CalibrationStore> checkStore;
+            if (checking) checkStore = CalibrationStore::open(argCheck.getValue());
+
+            // ---- First pass: is the input usable? ------------------------------------------
+            cli::Progress p1("wifi-calibrate: scanning", !argQuiet.getValue());
+            const RawlogSummary summary =
+                summarizeRawlog(argIn.getValue(), [&](double f) { p1.update(f); });
+            p1.done(std::to_string(summary.csiFrames) + " CSI frames");
+            if (summary.csiFrames == 0)
+                throw std::runtime_error(
+                    "'" + argIn.getValue() + "' holds no CObservationWiFiCSI observations");
+
+            // Which transmitters' frames to use, and where each one is.
+            std::map<MacAddress, mrpt::math::TPoint2D> txAt;
+            std::set<MacAddress> use;
+            if (onlyMac && !summary.transmitters.count(*onlyMac))
+                throw std::runtime_error(
+                    "transmitter " + onlyMac->asString() + " never appears in '" +
+                    argIn.getValue() + "'; it holds frames from:" + listMacs(summary));
+            if (splitter || argTx.isSet())
+            {
+                if (onlyMac)
+                    use.insert(*onlyMac);
+                else if (summary.transmitters.size() == 1)
+                    use.insert(summary.transmitters.begin()->first);
+                else
+                    throw std::runtime_error(
+                        "the rawlog holds frames from " +
+                        std::to_string(summary.transmitters.size()) +
+                        " transmitters: choose one with --mac" + listMacs(summary));
+                if (!sites.empty()) txAt[*use.begin()] = sites.front().position;
+            }
+            else
+            {
+                for (const auto& s : sites)
+                {
+                    if (!s.mac)
+                        throw std::runtime_error(
+                            argTxFile.getValue() + ": transmitter '" + s.name + "' has no mac");
+                    if (onlyMac && *s.mac != *onlyMac) continue;
+                    txAt[*s.mac] = s.position;
+                    if (summary.transmitters.count(*s.mac)) use.insert(*s.mac);
+                }
+                if (onlyMac && !txAt.count(*onlyMac))
+                    throw std::runtime_error(
+                        "transmitter " + onlyMac->asString() + " is not listed in " +
+                        argTxFile.getValue());
+                if (use.empty())
+                    throw std::runtime_error(
+                        "none of the transmitters in " + argTxFile.getValue() +
+                        " appears in the rawlog; it holds frames from:" + listMacs(summary));
+            }
+
+            // Antennas and channels of the chosen frames.
+            std::map<std::string, uint64_t> channels;
+            for (const auto& mac : use)
+            {
+                const auto& src = summary.transmitters.at(mac);
+                if (src.maxRx > array.size())
+                    throw std::runtime_error(
+                        "frames from " + mac.asString() + " have " + std::to_string(src.maxRx) +
+                        " receive chains but the array '" + array.name + "' (" +
+                        argArray.getValue() + ") has " + std::to_string(array.size()) +
+                        " elements: wrong array file?");
+                if (src.maxRx < array.size())
+                    std::cerr << "wifi-calibrate: warning: frames from " << mac.asString()
+                              << " have " << src.maxRx << " receive chains, the array "
+                              << array.size() << " elements: using the first " << src.maxRx << "\n";
+                for (const auto& [cs, n] : src.channels) channels[cs] += n;
+            }
+            if (onlyChannel)
+            {
+                bool found = false;
+                for (const auto& [cs, n] : channels)
+                    found |= Chanspec::fromString(cs).centerChannel == onlyChannel->centerChannel &&
+                             Chanspec::fromString(cs).bandwidthMHz == onlyChannel->bandwidthMHz;
+                if (!found)
+                {
+                    std::string have;
+                    for (const auto& [cs, n] : channels) have += " " + cs;
+                    throw std::runtime_error(
+                        "no frames on channel " + onlyChannel->asString() +
+                        " from the chosen transmitter(s); channels present:" + have);
+                }
+            }
+
+            // Robot poses.
+            PoseTrack poses;
+            if (!splitter)
+            {
+                if (argPoses.getValue() == "odometry")
+                {
+                    if (summary.odometryReadings == 0)
+                        throw std::runtime_error(
+                            "the rawlog has no robot poses (no CObservationOdometry): record "
+                            "odometry with the CSI, or give a TUM trajectory with --poses FILE");
+                    poses = summary.odometry;
+                }
+                else
+                    poses = PoseTrack::fromTumFile(argPoses.getValue());
+                poses =
+                    poses.transformed(mrpt::math::TPose2D(origin[0], origin[1], origin[2] / kDeg));
+                if (poses.endTime() < summary.firstCsiTime ||
+                    poses.startTime() > summary.lastCsiTime)
+                    throw std::runtime_error(
+                        "the poses (" + fixed(poses.startTime(), 2) + " .. " +
+                        fixed(poses.endTime(), 2) + " s) do not overlap the CSI frames (" +
+                        fixed(summary.firstCsiTime, 2) + " .. " + fixed(summary.lastCsiTime, 2) +
+                        " s)");
+            }
+
+            // ---- Second pass: the frames -------------------------------------------------
+            PreprocessOptions pre = calibrationPreprocessOptions();
+            pre.minRssi_dBm = argMinRssi.getValue();
+            FramePreparer preparer(array, pre);
+            CalibratorOptions copt;
+            copt.mode = splitter ? CalibrationMode::Splitter : CalibrationMode::Drive;
+            copt.segment_s = argSegment.getValue();
+            copt.robustScale = argRobust.getValue();
+            PhaseCalibrator calibrator(array, copt);
+            std::map<uint32_t, std::vector<CalibrationFrame>> checkFrames;
+            std::map<uint32_t, uint64_t> checkSeen;
+            const uint64_t checkStride =
+                std::max<uint64_t>(1, summary.csiFrames / 3000);  // enough for a verdict
+            std::map<std::string, uint64_t> rejected;
+            uint64_t noPose = 0, accepted = 0;
+            CalibrationFrame frame;
+            cli::Progress p2("wifi-calibrate: reading", !argQuiet.getValue());
+            readRawlog(
+                argIn.getValue(),
+                [&](const CObservationWiFiCSI& obs)
+                {
+                    if (!use.count(obs.transmitter)) return;
+                    if (onlyChannel && (obs.chanspec.centerChannel != onlyChannel->centerChannel ||
+                                        obs.chanspec.bandwidthMHz != onlyChannel->bandwidthMHz))
+                        return;
+                    RejectReason r;
+                    if (splitter)
+                        r = preparer.prepareStatic(obs, frame);
+                    else
+                    {
+                        mrpt::math::TPose2D robot;
+                        if (!poses.at(mrpt::Clock::toDouble(obs.timestamp), robot))
+                        {
+                            ++noPose;
+                            return;
+                        }
+                        r = preparer.prepare(obs, robot, txAt.at(obs.transmitter), frame);
+                    }
+                    if (r != RejectReason::Accepted)
+                    {
+                        ++rejected[toString(r)];
+                        return;
+                    }
+                    ++accepted;
+                    if (checking)
+                    {
+                        const uint32_t k = (uint32_t(frame.chanspec.centerChannel) << 16) |
+                                           frame.chanspec.bandwidthMHz;
+                        if (checkSeen[k]++ % checkStride == 0) checkFrames[k].push_back(frame);
+                    }
+                    else
+                        calibrator.add(frame);
+                },
+                {}, [&](double f) { p2.update(f, std::to_string(accepted) + " frames"); });
+            p2.done(std::to_string(accepted) + " frames");
+
+            std::cout << "Input      : " << argIn.getValue() << " (" << summary.csiFrames
+                      << " CSI frames, " << summary.odometryReadings << " odometry readings)\n"
+                      << "Array      : " << array.name << " (" << array.size() << " elements, "
+                      << argArray.getValue() << ")\n"
+                      << "Mode       : " << (splitter ? "static splitter" : "drive") << "\n"
+                      << "Frames used: " << accepted;
+            if (noPose) std::cout << ", " << noPose << " without a pose";
+            for (const auto& [why, n] : rejected) std::cout << ", " << n << " " << why;
+            std::cout << "\n";
+            if (accepted == 0)
+                throw std::runtime_error("no usable frames (see the rejection counts above)");
+
+            // ---- Check mode --------------------------------------------------------------
+            if (checking)
+            {
+                bool anyStale = false;
+                for (const auto& [k, frames] : checkFrames)
+                {
+                    const Chanspec cs = frames.front().chanspec;
+                    const PhaseCalibration* c =
+                        checkStore->find(array.name, cs, frames.front().nRx);
+                    std::cout << "\nChannel " << cs.asString() << "\n";
+                    if (!c)
+                    {
+                        std::cout << "  no calibration for this channel in " << argCheck.getValue()
+                                  << "\n";
+                        continue;
+                    }
+                    if (splitter)
+                        throw std::invalid_argument(
+                            "--check needs a drive (not --static-splitter)");
+                    const CheckResult r = calibrationResidual(frames, array, *c);
+                    std::cout << "  calibration      : " << c->sourcePath << " (" << c->date
+                              << ", residual " << fixed(c->residual_rad, 3) << " rad)\n"
+                              << "  frames checked   : " << r.frames << "\n"
+                              << "  bearing error    : median " << fixed(r.medianError_deg, 2)
+                              << " deg, p90 " << fixed(r.p90Error_deg, 2)
+                              << " deg (uncalibrated median "
+                              << fixed(r.medianErrorUncalibrated_deg, 1) << " deg)\n"
+                              << "  phase residual   : " << fixed(r.phaseResidual_rad, 3)
+                              << " rad (limit " << fixed(r.residualLimit_rad, 3) << " rad)\n"
+                              << "  verdict          : " << r.message << "\n";
+                    if (r.stale)
+                    {
+                        anyStale = true;
+                        std::cerr << "wifi-calibrate: " << cs.asString() << ": " << r.message
+                                  << "\n";
+                    }
+                }
+                return anyStale ? 3 : 0;
+            }
+
+            // ---- Calibrate each channel ---------------------------------------------------
+            int rc = 0;
+            for (const Chanspec& cs : calibrator.channels())
+            {
+                const ChannelCalibration res = calibrator.solve(cs);
+                const auto& d = res.diag;
+                const auto& c = res.calibration;
+                std::cout << "\nChannel " << cs.asString() << " (" << c.antennas() << " antennas, "
+                          << c.subcarriers.size() << " subcarriers)\n"
+                          << "  frames           : " << d.frames << " in " << d.segments
+                          << " segments over " << fixed(d.duration_s) << " s\n";
+                if (!splitter)
+                    std::cout << "  geometry         : " << d.bearingBins
+                              << " bearing bins of 10 deg, 5-95% span "
+                              << fixed(d.bearingSpan_deg, 0) << " deg, median distance "
+                              << fixed(d.medianDistance_m, 2) << " m\n";
+                std::cout << "  line of sight    : " << fixed(100 * d.losShare, 0)
+                          << " % of frames explained (principal share "
+                          << fixed(d.principalShare, 3) << ")\n"
+                          << "  phase residual   : coarse " << fixed(d.coarseResidual_rad * kDeg, 2)
+                          << " deg, refined " << fixed(d.residual_rad * kDeg, 2) << " deg RMS\n"
+                          << "  Levenberg-Marq.  : " << d.iterations << " iterations, cost "
+                          << std::setprecision(6) << d.initialCost << " -> " << d.finalCost << ", "
+                          << fixed(d.solveTime_s, 2) << " s\n"
+                          << "  antenna offsets  :";
+                for (size_t i = 0; i < c.antennas(); ++i)
+                    std::cout << " " << i << ":" << fixed(meanPhase(c.phases_rad[i]) * kDeg, 1)
+                              << "deg";
+                std::cout << "  (mean over subcarriers)\n  antenna gains    :";
+                for (size_t i = 0; i < c.antennas(); ++i)
+                    std::cout << " " << i << ":" << fixed(c.gainAt(i), 2) << "dB";
+                std::cout << "\n";
+                if (!res.bearingErrorAfter_deg.empty())
+                    std::cout << "  bearing error    : median "
+                              << fixed(quantile(res.bearingErrorBefore_deg, 0.5), 2) << " -> "
+                              << fixed(quantile(res.bearingErrorAfter_deg, 0.5), 2) << " deg, p90 "
+                              << fixed(quantile(res.bearingErrorBefore_deg, 0.9), 2) << " -> "
+                              << fixed(quantile(res.bearingErrorAfter_deg, 0.9), 2) << " deg ("
+                              << res.bearingErrorAfter_deg.size()
+                              << " frames of the drive, Bartlett scan)\n";
+                for (const auto& w : res.warnings)
+                    std::cerr << "wifi-calibrate: warning: " << cs.asString() << ": " << w << "\n";
+                const std::string path =
+                    PhaseCalibration::pathFor(argOut.getValue(), array.name, cs);
+                if (res.determined() || argForce.getValue())
+                {
+                    c.saveYamlFile(path);
+                    std::cout << "  written          : " << path
+                              << (res.determined() ? "" : " (forced despite the warnings)") << "\n";
+                }
+                else
+                {
+                    std::cout << "  NOT written      : " << path
+                              << " (the drive cannot determine the calibration, see the warnings;"
+                                 " --force writes it anyway)\n";
+                    rc = 2;
+                }
+                if (argReport.isSet())
+                    for (const auto& png : writeCalibrationReport(res, argReport.getValue()))
+                        std::cout << "  report           : " << png << "\n";
+            }
+            return rc;
+        });
+}

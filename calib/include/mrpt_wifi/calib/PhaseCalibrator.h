@@ -1,0 +1,192 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPoint2D.h>
+#include <mrpt/math/TPose2D.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/PhaseCalibration.h>
+
+#include <Eigen/Core>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+/** Phase calibration of a receive array (the paper's "Quick and easy calibration"). */
+namespace mrpt_wifi::calib
+{
+/** One CSI frame ready for calibration: sign-corrected, without sampling-time offset and common
+ *  phase, power-normalised, *uncalibrated*, with the bearing it should have had. */
+struct CalibrationFrame
+{
+    double time_s = 0;  //!< UNIX seconds
+    MacAddress transmitter;
+    Chanspec chanspec;
+    int8_t rssi_dBm = 0;
+    unsigned nRx = 0;
+    unsigned nTx = 0;  //!< streams used
+    std::shared_ptr<const SubcarrierLayout> layout;
+    Eigen::MatrixXcf H;  //!< [(stream·nRx + rx)][subcarrier of the layout]
+
+    bool hasGeometry = false;        //!< false in splitter mode: every antenna sees the same signal
+    double expectedAoa_rad = 0;      //!< line-of-sight direction of the transmitter, sensor frame
+    double distance_m = 0;           //!< receive array to transmitter
+    mrpt::math::TPose2D sensorPose;  //!< receive array in the transmitter's frame
+};
+
+/** Preprocessing used for calibration: sub-band sign correction, STO/CFO removal and power
+ *  normalisation on; no calibration applied; the firmware-overwritten subcarrier left out. */
+PreprocessOptions calibrationPreprocessOptions();
+
+/** Turns CObservationWiFiCSI into CalibrationFrame (one instance per thread). */
+class FramePreparer
+{
+public:
+    explicit FramePreparer(
+        AntennaArray array, PreprocessOptions opts = calibrationPreprocessOptions());
+
+    const AntennaArray& array() const { return pre_.rxArray(); }
+
+    /** Drive mode: the robot base pose and the transmitter position in one frame; the receive
+     *  array sits at obs.sensorPose on the robot. */
+    RejectReason prepare(
+        const CObservationWiFiCSI& obs, const mrpt::math::TPose2D& robotPose,
+        const mrpt::math::TPoint2D& transmitter, CalibrationFrame& out);
+    /** Splitter mode: no geometry. */
+    RejectReason prepareStatic(const CObservationWiFiCSI& obs, CalibrationFrame& out);
+
+private:
+    RejectReason common(const CObservationWiFiCSI& obs, CalibrationFrame& out);
+    CsiPreprocessor pre_;
+    CleanCsi clean_;
+};
+
+enum class CalibrationMode : uint8_t
+{
+    Drive,    //!< robot drives near a transmitter at a known position (expected bearings)
+    Splitter  //!< one transmitter fed through a splitter and equal cables to every antenna
+};
+
+struct CalibratorOptions
+{
+    CalibrationMode mode = CalibrationMode::Drive;
+    /** Frames are pooled into segments of this duration: the unit the robust loss weighs (a
+     *  reflection that dominates for a moment spoils one segment, not the fit). */
+    double segment_s = 0.5;
+    /** Cauchy scale of the robust loss, on the normalised misfit of one segment at one
+     *  subcarrier (0: plain least squares). */
+    double robustScale = 0.3;
+    unsigned maxIterations = 50;
+    /** Estimate per-antenna gains (mean power ratio to antenna 0) too. */
+    bool estimateGains = true;
+    /** Frames kept (evenly spread) to measure bearing errors before/after and for reports. */
+    size_t checkFrames = 1500;
+
+    // What makes a drive able to determine a calibration (warnings otherwise).
+    size_t minFrames = 300;
+    double minDuration_s = 15;
+    double bearingBin_deg = 10;   //!< histogram of expected bearings ...
+    unsigned minBearingBins = 6;  //!< ... needs this many bins with ≥ minBinShare of frames
+    double minBinShare = 0.005;
+    double maxMedianDistance_m = 8;  //!< the paper drives within 5 m
+    double losCoherence = 0.8;       //!< a segment is LoS-dominated if the fit explains this
+    double minLosShare = 0.5;        //!< share of frames in LoS-dominated segments
+};
+
+/** What the fit found out about the data (numbers for stdout and the report). */
+struct CalibrationDiagnostics
+{
+    size_t frames = 0, snapshots = 0, segments = 0;
+    double duration_s = 0;
+    unsigned bearingBins = 0;    //!< occupied bins of the expected-bearing histogram
+    double bearingSpan_deg = 0;  //!< 5–95 % range of the expected bearings (folded)
+    double medianDistance_m = 0;
+    double losShare = 0;        //!< frames in segments the calibrated LoS explains well
+    double principalShare = 0;  //!< mean λ0 / tr(R) of the pooled per-subcarrier covariances
+    double residual_rad = 0;    //!< RMS phase residual: sqrt(−ln coherence) after the fit
+    double coarseResidual_rad = 0;
+    unsigned iterations = 0;
+    double initialCost = 0, finalCost = 0;
+    double solveTime_s = 0;
+    std::string solverReport;
+};
+
+/** The outcome of calibrating one channel. */
+struct ChannelCalibration
+{
+    PhaseCalibration calibration;                       //!< to be saved (antenna 0 ≡ 0)
+    std::vector<std::vector<double>> coarsePhases_rad;  //!< principal component, [ant][sub]
+    CalibrationDiagnostics diag;
+    /** Bearing errors [deg] on the kept frames, without and with the calibration (drive mode). */
+    std::vector<double> bearingErrorBefore_deg, bearingErrorAfter_deg;
+    std::vector<std::string> warnings;  //!< why the drive may not determine a calibration
+    bool determined() const { return warnings.empty(); }
+};
+
+/** Accumulates frames (per channel) and solves for the calibration.
+ *
+ * Drive mode, per frame t and subcarrier k: the CSI h_tk (one vector over antennas per stream)
+ * is suppressed by the expected steering, x_tk = h_tk ⊙ conj(a(θ_t, f_k)), leaving
+ * c_tk · e^{jΦ_k} + multipath + noise with c_tk a common complex factor (LoS gain, the per-packet
+ * delay and phase). Because c_tk changes per packet and subcarrier, the principal component is
+ * taken per subcarrier (R_k = Σ x x^H, invariant to c_tk) rather than of the flattened matrix
+ * as in the paper. Φ_k^coarse = ∠u0(R_k) relative to antenna 0; then Levenberg–Marquardt
+ * (Ceres) refines the unit-modulus e^{jΦ_k} against the orthogonal subspace of each segment's
+ * R_sk, weighted by the eigen-gaps (exactly the power the calibrated LoS leaves unexplained),
+ * with a Cauchy loss per segment × subcarrier. Splitter mode: the same without suppression.
+ * Memory: O(segments × subcarriers × antennas²), frames are not kept (except checkFrames). */
+class PhaseCalibrator
+{
+public:
+    explicit PhaseCalibrator(AntennaArray array, CalibratorOptions opts = {});
+
+    const CalibratorOptions& options() const { return opts_; }
+    const AntennaArray& array() const { return array_; }
+
+    /** Adds a frame (frames of one channel in time order). Throws std::invalid_argument for a
+     *  frame without geometry in drive mode or with more antennas than the array. */
+    void add(const CalibrationFrame& f);
+
+    std::vector<Chanspec> channels() const;
+    size_t frames(const Chanspec& cs) const;
+
+    /** Calibrates one channel; `device` defaults to the array name. Throws std::runtime_error
+     *  if there are no frames for it. */
+    ChannelCalibration solve(const Chanspec& cs) const;
+
+private:
+    struct Segment
+    {
+        double t0 = 0;
+        size_t frames = 0;
+        std::vector<Eigen::MatrixXcd> R;  //!< [subcarrier] Σ x x^H
+    };
+    struct Channel
+    {
+        std::shared_ptr<const SubcarrierLayout> layout;
+        unsigned nRx = 0;
+        std::vector<Segment> segments;
+        Eigen::VectorXd antennaPower;
+        size_t frames = 0, snapshots = 0;
+        double tFirst = 0, tLast = 0;
+        std::vector<float> foldedAoa, distance;
+        std::vector<CalibrationFrame> kept;
+        size_t keepStride = 1, seen = 0;
+    };
+    static uint32_t key(const Chanspec& cs)
+    {
+        return (uint32_t(cs.centerChannel) << 16) | cs.bandwidthMHz;
+    }
+
+    AntennaArray array_;
+    CalibratorOptions opts_;
+    std::map<uint32_t, Channel> channels_;
+};
+
+/** Calibration factors [rx][subcarrier of the layout]: e^{−jφ}·10^{−g/20}, as CsiPreprocessor
+ *  applies them. */
+Eigen::MatrixXcf calibrationFactors(
+    const PhaseCalibration& c, const SubcarrierLayout& layout, unsigned nRx);
+
+}  // namespace mrpt_wifi::calib

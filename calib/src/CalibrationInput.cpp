@@ -1,0 +1,173 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/containers/yaml.h>
+#include <mrpt/core/exceptions.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/calib/CalibrationInput.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace mrpt_wifi::calib
+{
+namespace
+{
+std::string firstLine(const std::exception& e)
+{
+    std::string msg = e.what();
+    const auto pos = msg.find("Message:");
+    if (pos != std::string::npos) msg = msg.substr(pos + 8);
+    const auto eol = msg.find('\n');
+    if (eol != std::string::npos) msg = msg.substr(0, eol);
+    while (!msg.empty() && msg.front() == ' ') msg.erase(msg.begin());
+    return msg;
+}
+}  // namespace
+
+std::vector<TransmitterSite> loadTransmitterSites(const std::string& path)
+{
+    std::ifstream f(path);
+    if (!f) throw std::runtime_error("cannot open transmitters file '" + path + "'");
+    std::stringstream ss;
+    ss << f.rdbuf();
+    mrpt::containers::yaml doc;
+    try
+    {
+        doc = mrpt::containers::yaml::FromText(ss.str());
+    }
+    catch (const std::exception& e)
+    {
+        throw std::runtime_error(path + ": YAML syntax error: " + firstLine(e));
+    }
+    if (!doc.isMap() || !doc.has("transmitters") || !doc["transmitters"].isSequence())
+        throw std::runtime_error(path + ": expected a list under the key 'transmitters'");
+
+    std::vector<TransmitterSite> sites;
+    const auto& seq = doc["transmitters"].asSequence();
+    for (size_t i = 0; i < seq.size(); ++i)
+    {
+        const std::string where = path + ": transmitters[" + std::to_string(i) + "]";
+        const mrpt::containers::yaml e(seq[i]);
+        if (!e.isMap()) throw std::runtime_error(where + ": expected a map");
+        TransmitterSite s;
+        s.name = e.has("name") ? e["name"].as<std::string>() : "tx" + std::to_string(i);
+        if (e.has("mac"))
+        {
+            const auto mac = MacAddress::parse(e["mac"].as<std::string>());
+            if (!mac)
+                throw std::runtime_error(
+                    where + ".mac: '" + e["mac"].as<std::string>() + "' is not a MAC address");
+            s.mac = *mac;
+        }
+        if (!e.has("position") || !e["position"].isSequence() ||
+            e["position"].asSequence().size() != 2)
+            throw std::runtime_error(where + ".position: expected [x, y] in metres");
+        try
+        {
+            s.position.x = e["position"].asSequence()[0].as<double>();
+            s.position.y = e["position"].asSequence()[1].as<double>();
+        }
+        catch (const std::exception&)
+        {
+            throw std::runtime_error(where + ".position: expected two numbers");
+        }
+        sites.push_back(s);
+    }
+    if (sites.empty()) throw std::runtime_error(path + ": the transmitter list is empty");
+    return sites;
+}
+
+void readRawlog(
+    const std::string& path, const std::function<void(const CObservationWiFiCSI&)>& onCsi,
+    const std::function<void(double, const mrpt::math::TPose2D&)>& onOdometry,
+    const std::function<void(double)>& onProgress)
+{
+    if (!mrpt::system::fileExists(path))
+        throw std::runtime_error("rawlog '" + path + "': cannot open: no such file");
+    mrpt::io::CFileGZInputStream f;
+    std::string openError;
+    if (!f.open(path, openError))
+        throw std::runtime_error("rawlog '" + path + "': cannot open: " + openError);
+    const double total = double(std::max<uint64_t>(f.getTotalBytesCount(), 1));
+    auto archive = mrpt::serialization::archiveFrom(f);
+    const auto deliver = [&](const mrpt::serialization::CSerializable::Ptr& o)
+    {
+        if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+        {
+            if (onCsi) onCsi(*csi);
+        }
+        else if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o))
+        {
+            if (onOdometry)
+                onOdometry(mrpt::Clock::toDouble(odo->timestamp), odo->odometry.asTPose());
+        }
+    };
+    auto lastReport = std::chrono::steady_clock::now();
+    size_t objects = 0;
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            archive >> obj;
+        }
+        catch (const mrpt::serialization::CExceptionEOF&)
+        {
+            break;
+        }
+        catch (const std::exception& e)
+        {
+            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
+            throw std::runtime_error(
+                "rawlog '" + path + "': unreadable object #" + std::to_string(objects + 1) + ": " +
+                firstLine(e));
+        }
+        ++objects;
+        if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
+            for (const auto& o : *sf) deliver(o);
+        else
+            deliver(obj);
+        if (onProgress &&
+            std::chrono::steady_clock::now() - lastReport > std::chrono::milliseconds(100))
+        {
+            lastReport = std::chrono::steady_clock::now();
+            onProgress(double(f.getPosition()) / total);
+        }
+    }
+    if (onProgress) onProgress(1.0);
+}
+
+RawlogSummary summarizeRawlog(
+    const std::string& path, const std::function<void(double)>& onProgress)
+{
+    RawlogSummary s;
+    readRawlog(
+        path,
+        [&](const CObservationWiFiCSI& obs)
+        {
+            const double t = mrpt::Clock::toDouble(obs.timestamp);
+            if (s.csiFrames == 0) s.firstCsiTime = t;
+            s.lastCsiTime = t;
+            ++s.csiFrames;
+            auto& src = s.transmitters[obs.transmitter];
+            ++src.frames;
+            ++src.channels[obs.chanspec.asString()];
+            src.maxRx = std::max<unsigned>(src.maxRx, obs.nRx);
+            src.minRssi = std::min<int>(src.minRssi, obs.rssi_dBm);
+            src.maxRssi = std::max<int>(src.maxRssi, obs.rssi_dBm);
+        },
+        [&](double t, const mrpt::math::TPose2D& p)
+        {
+            ++s.odometryReadings;
+            s.odometry.add(t, p);
+        },
+        onProgress);
+    return s;
+}
+
+}  // namespace mrpt_wifi::calib
