@@ -1,4 +1,5 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/system/datetime.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 
@@ -39,18 +40,41 @@ const std::vector<Eigen::MatrixXcd>& CleanCsi::groupCovariances(unsigned groups)
 {
     if (covGroups_ == groups && cov_.size() == groups) return cov_;
     cov_.resize(groups);
-    const Eigen::Index nSub = H.cols();
+    const Eigen::Index nSub = H.cols(), rows = H.rows();
+    // One pass over the columns (contiguous: streams × antennas), accumulating the upper
+    // triangle of Σ v v^H per stream block in split real/imaginary form (vectorises; small
+    // Eigen products per block cost more in call overhead than in arithmetic here).
+    constexpr unsigned kMax = CObservationWiFiCSI::kMaxChains;
     for (unsigned g = 0; g < groups; ++g)
     {
         const auto [b, e] = groupRange(size_t(nSub), groups, g);
-        Eigen::MatrixXcf acc = Eigen::MatrixXcf::Zero(nRx, nRx);
-        for (unsigned m = 0; m < nTx; ++m)
+        float accRe[kMax][kMax] = {}, accIm[kMax][kMax] = {};
+        for (Eigen::Index j = Eigen::Index(b); j < Eigen::Index(e); ++j)
         {
-            const auto block =
-                H.block(Eigen::Index(m * nRx), Eigen::Index(b), nRx, Eigen::Index(e - b));
-            acc.noalias() += block * block.adjoint();
+            const std::complex<float>* col = H.data() + j * rows;
+            for (unsigned m = 0; m < nTx; ++m)
+            {
+                const std::complex<float>* v = col + m * nRx;
+                for (unsigned r = 0; r < nRx; ++r)
+                {
+                    const float ar = v[r].real(), ai = v[r].imag();
+                    for (unsigned c = r; c < nRx; ++c)
+                    {
+                        // v_r · conj(v_c)
+                        accRe[r][c] += ar * v[c].real() + ai * v[c].imag();
+                        accIm[r][c] += ai * v[c].real() - ar * v[c].imag();
+                    }
+                }
+            }
         }
-        cov_[g] = acc.cast<std::complex<double>>();
+        auto& R = cov_[g];
+        R.resize(nRx, nRx);
+        for (unsigned r = 0; r < nRx; ++r)
+            for (unsigned c = r; c < nRx; ++c)
+            {
+                R(r, c) = {accRe[r][c], accIm[r][c]};
+                R(c, r) = std::conj(R(r, c));
+            }
     }
     covGroups_ = groups;
     return cov_;
@@ -163,7 +187,8 @@ void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
             " in '" + calib_.path() + "'");
 }
 
-double CsiPreprocessor::estimatePhaseSlope(const Eigen::MatrixXcf& H, const std::vector<int>& k)
+double CsiPreprocessor::estimatePhaseSlope(
+    const Eigen::Ref<const Eigen::MatrixXcf>& H, const std::vector<int>& k)
 {
     std::complex<double> acc = 0;
     for (size_t j = 0; j + 1 < k.size(); ++j)
@@ -262,18 +287,28 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     out.removedDelay_s = 0;
     if (options_.removeSamplingTimeOffset)
     {
-        const double slope = estimatePhaseSlope(out.H, layout.subcarriers);
-        out.removedSlope_rad = slope;
-        out.removedDelay_s = -slope / (2 * M_PI * kSubcarrierSpacingHz);
-        // Common phase too (CFO): make the first row's mean phase zero.
-        std::complex<double> ref = 0;
-        for (size_t j = 0; j < nSub; ++j)
-            ref += std::complex<double>(out.H(0, Eigen::Index(j))) *
-                   std::polar(1.0, -slope * layout.subcarriers[j]);
-        const double common = std::arg(ref);
-        for (size_t j = 0; j < nSub; ++j)
-            out.H.col(Eigen::Index(j)) *=
-                std::complex<float>(std::polar(1.0, -slope * layout.subcarriers[j] - common));
+        const auto& ks = layout.subcarriers;
+        for (unsigned m = 0; m < out.nTx; ++m)
+        {
+            auto rows = out.H.middleRows(Eigen::Index(m * nRx), nRx);
+            const double slope = estimatePhaseSlope(rows, ks);
+            if (m == 0)
+            {
+                out.removedSlope_rad = slope;
+                out.removedDelay_s = -slope / (2 * M_PI * kSubcarrierSpacingHz);
+            }
+            // e^{−j·slope·k} by recurrence along consecutive subcarriers (a sincos per gap only).
+            const std::complex<double> step = std::polar(1.0, -slope);
+            std::complex<double> z = std::polar(1.0, -slope * ks[0]);
+            for (size_t j = 0; j < nSub; ++j)
+            {
+                if (j > 0) z = ks[j] - ks[j - 1] == 1 ? z * step : std::polar(1.0, -slope * ks[j]);
+                rows.col(Eigen::Index(j)) *= std::complex<float>(z);
+            }
+        }
+        // Common phase (CFO): the first row's mean phase becomes zero, for every stream alike.
+        const std::complex<float> ref = out.H.row(0).sum();
+        if (std::abs(ref) > 0) out.H *= std::conj(ref) / std::abs(ref);
     }
 
     // Repair masked subcarriers from their nearest unmasked neighbours (linear, complex).

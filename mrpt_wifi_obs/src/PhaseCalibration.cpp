@@ -19,7 +19,7 @@ namespace
     throw CalibrationError("phase calibration " + where + ": " + what);
 }
 
-const mrpt::containers::yaml& required(
+mrpt::containers::yaml required(
     const mrpt::containers::yaml& doc, const std::string& key, const std::string& where)
 {
     if (!doc.has(key)) fail(where, "missing key '" + key + "'");
@@ -37,6 +37,14 @@ T asValue(const mrpt::containers::yaml& node, const std::string& key, const std:
     {
         fail(where, "key '" + key + "' has the wrong type");
     }
+}
+
+/** A YAML single-quoted scalar ('' escapes a quote). */
+std::string quoted(const std::string& s)
+{
+    std::string o = "'";
+    for (char c : s) o += c == '\'' ? std::string("''") : std::string(1, c);
+    return o + "'";
 }
 
 std::vector<double> numberList(
@@ -189,10 +197,10 @@ std::string PhaseCalibration::asYamlText() const
     o << "version: " << kFormatVersion << "\n";
     o << "device: " << device << "\n";
     o << "chanspec: " << chanspec.asString() << "\n";
-    o << "date: '" << date << "'\n";
+    o << "date: " << quoted(date) << "\n";
     o << "frames_used: " << framesUsed << "\n";
     o << "residual_rad: " << residual_rad << "\n";
-    o << "method: '" << method << "'\n";
+    o << "method: " << quoted(method) << "\n";
     o << "subband_sign_corrected: " << (subbandSignCorrected ? "true" : "false") << "\n";
     o << "antennas: " << phases_rad.size() << "\n";
     o << "subcarriers: [";

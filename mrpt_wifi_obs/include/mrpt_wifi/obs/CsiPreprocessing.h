@@ -39,8 +39,10 @@ struct PreprocessOptions
      *  of the layout: a frame can't tell whether they were repaired. */
     bool excludeFirmwareOverwritten = true;
     /** Remove the per-packet linear phase across subcarriers (sampling-time offset plus the
-     *  mean channel delay; common to all antennas) and the common phase. Delays reported by the
-     *  estimators are then relative to the frame's mean delay. */
+     *  mean channel delay), fitted per transmit stream and common to its receive antennas (each
+     *  stream has its own cyclic shift delay in 802.11n/ac), centred on k = 0 so the phase
+     *  between streams at the centre frequency (the AoD) is kept; then the common phase (CFO).
+     *  Delays reported by the estimators are relative to the frame's mean delay. */
     bool removeSamplingTimeOffset = true;
     /** Scale every frame to unit mean power per (stream, antenna, subcarrier) (undoes AGC). */
     bool normalizePower = true;
@@ -77,14 +79,14 @@ struct CleanCsi
     int8_t rssi_dBm = 0;
     uint16_t sequenceNumber = 0;
     unsigned nRx = 0;
-    unsigned nTx = 0;                        //!< streams used
-    std::vector<uint8_t> streamIndex;        //!< original transmit stream of each used one
+    unsigned nTx = 0;                  //!< streams used
+    std::vector<uint8_t> streamIndex;  //!< original transmit stream of each used one
     std::shared_ptr<const SubcarrierLayout> layout;
     /** CSI [(stream·nRx + rx)][subcarrier index of the layout]. */
     Eigen::MatrixXcf H;
     bool calibrated = false;
-    double removedSlope_rad = 0;  //!< linear phase removed per subcarrier step
-    double removedDelay_s = 0;    //!< the same as a delay: slope / (2π·312.5 kHz)
+    double removedSlope_rad = 0;  //!< linear phase removed per subcarrier step (first stream)
+    double removedDelay_s = 0;    //!< the same as a delay: −slope / (2π·312.5 kHz)
 
     /** Spatial covariance over streams and subcarriers, split into `groups` contiguous
      *  sub-bands (so each can use its own centre frequency): group g is
@@ -93,6 +95,9 @@ struct CleanCsi
     /** Same over receive antennas and subcarriers, across transmit streams (nTx × nTx): the
      *  transmitter-side covariance used for the angle of departure. */
     const std::vector<Eigen::MatrixXcd>& txGroupCovariances(unsigned groups) const;
+
+    /** Forgets the cached covariances (after changing H by hand). */
+    void invalidateCaches() const { covGroups_ = txCovGroups_ = 0; }
 
     /** Which layout indices each of `groups` sub-bands covers: [begin, end). */
     static std::pair<size_t, size_t> groupRange(size_t nSub, unsigned groups, unsigned g);
@@ -129,8 +134,9 @@ public:
     void checkCompatible(const Chanspec& cs, unsigned nRx);
 
     /** Per-packet phase slope across subcarriers [rad per subcarrier], from the lag-one
-     *  products summed over all rows (robust: no unwrapping). Exposed for tests. */
-    static double estimatePhaseSlope(const Eigen::MatrixXcf& H, const std::vector<int>& k);
+     *  products summed over the given rows (robust: no unwrapping). Exposed for tests. */
+    static double estimatePhaseSlope(
+        const Eigen::Ref<const Eigen::MatrixXcf>& H, const std::vector<int>& k);
 
 private:
     struct ChannelCache

@@ -59,10 +59,10 @@ struct PhaseCalibration
     double residual_rad = 0;
     std::string method;
     bool subbandSignCorrected = true;
-    std::vector<int> subcarriers;                  //!< k, ascending
-    std::vector<std::vector<double>> phases_rad;   //!< [antenna][index into subcarriers]
-    std::vector<double> gains_dB;                  //!< empty or one per antenna
-    std::string sourcePath;                        //!< file it was read from
+    std::vector<int> subcarriers;                 //!< k, ascending
+    std::vector<std::vector<double>> phases_rad;  //!< [antenna][index into subcarriers]
+    std::vector<double> gains_dB;                 //!< empty or one per antenna
+    std::string sourcePath;                       //!< file it was read from
 
     size_t antennas() const { return phases_rad.size(); }
 
@@ -92,7 +92,8 @@ struct PhaseCalibration
     /** `ch155_80mhz.yaml` */
     static std::string fileNameFor(const Chanspec& cs);
     /** `DIR/<device>/ch155_80mhz.yaml` */
-    static std::string pathFor(const std::string& dir, const std::string& device, const Chanspec& cs);
+    static std::string pathFor(
+        const std::string& dir, const std::string& device, const Chanspec& cs);
 };
 
 /** Where calibrations come from: one file (for one channel) or a folder with the layout above.

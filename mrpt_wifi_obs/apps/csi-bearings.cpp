@@ -1,0 +1,440 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * csi-bearings: runs a bearing estimator over the CSI of a rawlog and writes a rawlog with the
+ * original objects plus, after every CSI observation that gave a bearing,
+ * mrpt_wifi::CObservationWiFiBearing, mrpt::obs::CObservationBearingRange and (optionally)
+ * CObservationImage pictures; optionally a CSV and PNG files. */
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt/system/datetime.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/bearing/BearingImages.h>
+#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+
+using namespace mrpt_wifi;
+namespace fs = std::filesystem;
+
+namespace
+{
+/** Reads every object of a rawlog, calling `onObject`; `onProgress` gets the read fraction. */
+void forEachObject(
+    const std::string& path,
+    const std::function<void(mrpt::serialization::CSerializable::Ptr&)>& onObject,
+    const std::function<void(double)>& onProgress)
+{
+    mrpt::io::CFileGZInputStream f;
+    std::string err;
+    if (!f.open(path, err)) throw std::runtime_error("rawlog '" + path + "': cannot open: " + err);
+    auto archive = mrpt::serialization::archiveFrom(f);
+    uint64_t count = 0;
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            archive >> obj;
+        }
+        catch (const mrpt::serialization::CExceptionEOF&)
+        {
+            break;
+        }
+        catch (const std::exception& e)
+        {
+            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
+            throw std::runtime_error(
+                "rawlog '" + path + "': unreadable object #" + std::to_string(count + 1) + ": " +
+                mrpt::exception_to_str(e));
+        }
+        ++count;
+        onObject(obj);
+        if (onProgress && (count % 256) == 0)
+            onProgress(
+                double(f.getPosition()) / std::max<double>(1.0, double(f.getTotalBytesCount())));
+    }
+}
+
+std::string findShareFile(const std::string& relative)
+{
+    for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
+        if (fs::exists(fs::path(base) / relative)) return (fs::path(base) / relative).string();
+    throw std::runtime_error(
+        "cannot find '" + relative + "' in the mrpt_wifi share folder; pass --array FILE");
+}
+
+double median(std::vector<double> v)
+{
+    if (v.empty()) return NAN;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+/** Options file: {preprocess: {...}, window: {...}, estimators: {NAME: {...}}}. */
+struct ConfigFile
+{
+    PreprocessOptions pre;
+    bearing::BearingProcessor::Options window;
+    mrpt::containers::yaml estimatorParams;
+};
+
+ConfigFile loadConfig(const std::string& path, const std::string& algo)
+{
+    ConfigFile c;
+    if (path.empty()) return c;
+    const auto doc = mrpt::containers::yaml::FromFile(path);
+    const auto bad = [&](const std::string& what)
+    { throw std::invalid_argument("config '" + path + "': " + what); };
+    for (const auto& kv : doc.asMap())
+    {
+        const std::string k = kv.first.as<std::string>();
+        if (k != "preprocess" && k != "window" && k != "estimators")
+            bad("unknown section '" + k + "' (expected preprocess, window, estimators)");
+    }
+    if (doc.has("preprocess"))
+        for (const auto& kv : doc["preprocess"].asMap())
+        {
+            const std::string k = kv.first.as<std::string>();
+            const auto& v = kv.second;
+            if (k == "correct_subband_sign_80")
+                c.pre.correctSubbandSign80 = v.as<bool>();
+            else if (k == "correct_subband_sign_40")
+                c.pre.correctSubbandSign40 = v.as<bool>();
+            else if (k == "exclude_firmware_overwritten")
+                c.pre.excludeFirmwareOverwritten = v.as<bool>();
+            else if (k == "remove_sampling_time_offset")
+                c.pre.removeSamplingTimeOffset = v.as<bool>();
+            else if (k == "normalize_power")
+                c.pre.normalizePower = v.as<bool>();
+            else if (k == "min_rssi_dbm")
+                c.pre.minRssi_dBm = v.as<double>();
+            else if (k == "require_calibration")
+                c.pre.requireCalibration = v.as<bool>();
+            else if (k == "max_streams")
+                c.pre.maxStreams = v.as<unsigned>();
+            else
+                bad("unknown preprocess option '" + k + "'");
+        }
+    if (doc.has("window"))
+        for (const auto& kv : doc["window"].asMap())
+        {
+            const std::string k = kv.first.as<std::string>();
+            if (k == "capacity")
+                c.window.windowCapacity = kv.second.as<size_t>();
+            else if (k == "max_age_s")
+                c.window.windowMaxAge_s = kv.second.as<double>();
+            else if (k == "stride")
+                c.window.stride = std::max(1u, kv.second.as<unsigned>());
+            else
+                bad("unknown window option '" + k + "'");
+        }
+    if (doc.has("estimators") && doc["estimators"].has(algo))
+        c.estimatorParams = doc["estimators"][algo];
+    return c;
+}
+
+struct TransmitterStats
+{
+    uint64_t frames = 0, bearings = 0;
+    std::vector<double> aoa_deg, quality;
+    unsigned imagesWritten = 0;
+};
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return cli::runMain(
+        "csi-bearings",
+        [&]
+        {
+            std::string algoList;
+            for (const auto& n : bearing::estimatorNames())
+                algoList += (algoList.empty() ? "" : "|") + n;
+            TCLAP::CmdLine cmd(
+                "Estimates WiFi bearings (AoA, AoD) from the CSI observations of a rawlog and "
+                "writes a rawlog with the original objects plus mrpt_wifi::CObservationWiFiBearing "
+                "and mrpt::obs::CObservationBearingRange after each CSI frame that gave one. "
+                "Captures: convert them with csi-pcap2rawlog first.",
+                ' ', "0.1");
+            TCLAP::UnlabeledValueArg<std::string> argIn(
+                "input", "Input rawlog with CObservationWiFiCSI", true, "", "IN.rawlog", cmd);
+            TCLAP::UnlabeledValueArg<std::string> argOut(
+                "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
+            TCLAP::ValueArg<std::string> argAlgo(
+                "a", "algo", "Estimator: " + algoList, false, "aoa_only", "NAME", cmd);
+            TCLAP::ValueArg<std::string> argCalib(
+                "c", "calib",
+                "Phase calibration: a file (one channel) or a folder "
+                "DIR/<device>/ch<C>_<BW>mhz.yaml",
+                false, "", "FILE|DIR", cmd);
+            TCLAP::ValueArg<std::string> argArray(
+                "", "array", "Receive array file (default: share/arrays/rt-ac86u.yaml)", false, "",
+                "FILE", cmd);
+            TCLAP::MultiArg<std::string> argTxArray(
+                "", "tx-array",
+                "Transmitter array for AoD: FILE (all transmitters) or MAC=FILE; repeatable", false,
+                "[MAC=]FILE", cmd);
+            TCLAP::ValueArg<std::string> argConfig(
+                "", "config",
+                "YAML options: preprocess / window / estimators.NAME (see share/bearings/)", false,
+                "", "FILE", cmd);
+            TCLAP::MultiArg<std::string> argParam(
+                "p", "param", "Estimator option KEY=VALUE (overrides --config); repeatable", false,
+                "KEY=VALUE", cmd);
+            TCLAP::ValueArg<double> argMinRssi(
+                "", "min-rssi", "Reject frames below this RSSI [dBm]", false, -127, "DBM", cmd);
+            TCLAP::ValueArg<unsigned> argStride(
+                "", "stride", "Estimate every N-th accepted frame per transmitter", false, 0, "N",
+                cmd);
+            TCLAP::SwitchArg argRequireCalib(
+                "", "require-calib", "Reject frames on channels without calibration", cmd);
+            TCLAP::ValueArg<std::string> argCsv(
+                "", "csv", "Also write the bearings as CSV", false, "", "FILE", cmd);
+            TCLAP::ValueArg<std::string> argImages(
+                "", "images", "Write PNG pictures (CSI magnitude/phase, bearing profile) into DIR",
+                false, "", "DIR", cmd);
+            TCLAP::ValueArg<unsigned> argImageEvery(
+                "", "image-every", "Pictures for every N-th bearing of each transmitter", false,
+                100, "N", cmd);
+            TCLAP::SwitchArg argRawlogImages(
+                "", "rawlog-images",
+                "Also put the pictures into the output rawlog as CObservationImage", cmd);
+            TCLAP::SwitchArg argNoBR(
+                "", "no-bearing-range", "Do not add CObservationBearingRange", cmd);
+            TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
+            if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
+                rc >= 0)
+                return rc;
+
+            // ---- everything that can be wrong with the arguments, before any work
+            const std::string algo = argAlgo.getValue();
+            ConfigFile cfg = loadConfig(argConfig.getValue(), algo);
+            mrpt::containers::yaml params = mrpt::containers::yaml::Map();
+            if (!cfg.estimatorParams.isNullNode()) params = cfg.estimatorParams;
+            for (const auto& kv : argParam.getValue())
+            {
+                const auto eq = kv.find('=');
+                if (eq == std::string::npos || eq == 0)
+                    throw std::invalid_argument("--param '" + kv + "': expected KEY=VALUE");
+                const std::string key = kv.substr(0, eq);
+                const auto doc = mrpt::containers::yaml::FromText(key + ": " + kv.substr(eq + 1));
+                params[key] = doc[key];
+            }
+            auto estimator = bearing::createEstimator(algo, params);  // unknown name/option: throws
+            if (argImages.isSet() || argRawlogImages.getValue())
+                estimator->options().keepProfile = true;
+
+            const std::string arrayPath =
+                argArray.isSet() ? argArray.getValue() : findShareFile("arrays/rt-ac86u.yaml");
+            AntennaArray rxArray = AntennaArray::fromYamlFile(arrayPath);
+            CalibrationStore calib;
+            if (argCalib.isSet()) calib = CalibrationStore::open(argCalib.getValue());
+            PreprocessOptions pre = cfg.pre;
+            if (argMinRssi.isSet()) pre.minRssi_dBm = argMinRssi.getValue();
+            if (argRequireCalib.getValue()) pre.requireCalibration = true;
+            if (argStride.isSet()) cfg.window.stride = std::max(1u, argStride.getValue());
+            CsiPreprocessor preprocessor(pre, rxArray, calib);
+
+            bearing::BearingProcessor processor(
+                std::move(preprocessor), std::move(estimator), cfg.window);
+            for (const auto& t : argTxArray.getValue())
+            {
+                const auto eq = t.find('=');
+                if (eq == std::string::npos)
+                    processor.setDefaultTransmitterArray(AntennaArray::fromYamlFile(t));
+                else
+                    processor.setTransmitterArray(
+                        MacAddress::fromString(t.substr(0, eq)),
+                        AntennaArray::fromYamlFile(t.substr(eq + 1)));
+            }
+
+            // ---- pre-scan: channels and antenna counts must fit the array and calibration
+            cli::Progress progress("csi-bearings", !argQuiet.getValue());
+            std::set<std::pair<uint16_t, unsigned>> shapes;
+            uint64_t csiTotal = 0;
+            forEachObject(
+                argIn.getValue(),
+                [&](mrpt::serialization::CSerializable::Ptr& obj)
+                {
+                    const auto visit = [&](const mrpt::obs::CObservation::Ptr& o)
+                    {
+                        if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+                        {
+                            ++csiTotal;
+                            shapes.emplace(c->chanspec.raw, c->nRx);
+                        }
+                    };
+                    if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
+                        for (const auto& o : *sf) visit(o);
+                    else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj))
+                        visit(o);
+                },
+                [&](double f) { progress.update(f, "checking input"); });
+            if (csiTotal == 0)
+                throw std::runtime_error("'" + argIn.getValue() + "' holds no CObservationWiFiCSI");
+            for (const auto& [raw, nRx] : shapes)
+            {
+                const auto cs = Chanspec::decode(raw);
+                if (!cs) continue;
+                processor.preprocessor().checkCompatible(*cs, nRx);  // throws with a clear message
+            }
+
+            // ---- processing
+            mrpt::io::CFileGZOutputStream out;
+            if (!out.open(argOut.getValue()))
+                throw std::runtime_error("cannot create rawlog '" + argOut.getValue() + "'");
+            auto archive = mrpt::serialization::archiveFrom(out);
+            std::ofstream csv;
+            if (argCsv.isSet())
+            {
+                csv.open(argCsv.getValue());
+                if (!csv) throw std::runtime_error("cannot create '" + argCsv.getValue() + "'");
+                csv << "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,"
+                       "aoa_ambiguous,aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,"
+                       "delay_ns,quality,frames\n";
+                csv << std::fixed;
+            }
+            if (argImages.isSet()) fs::create_directories(argImages.getValue());
+
+            std::map<MacAddress, TransmitterStats> stats;
+            std::array<uint64_t, kRejectReasonCount> rejected{};
+            uint64_t csiSeen = 0, bearingsTotal = 0, imagesTotal = 0;
+            const double toDeg = 180.0 / M_PI;
+
+            // Returns what to add after one CSI observation.
+            const auto handle =
+                [&](const CObservationWiFiCSI& c, std::vector<mrpt::obs::CObservation::Ptr>& extra)
+            {
+                ++csiSeen;
+                auto& st = stats[c.transmitter];
+                ++st.frames;
+                RejectReason why;
+                auto b = processor.process(c, &why);
+                if (why != RejectReason::Accepted) ++rejected[size_t(why)];
+                if (!b) return;
+                ++bearingsTotal;
+                ++st.bearings;
+                st.aoa_deg.push_back(b->aoa_rad * toDeg);
+                st.quality.push_back(b->quality);
+                extra.push_back(b);
+                if (!argNoBR.getValue()) extra.push_back(b->asBearingRange());
+                if (csv.is_open())
+                    csv << std::setprecision(6) << mrpt::Clock::toDouble(b->timestamp) << ","
+                        << b->transmitter.asString() << "," << b->chanspec.asString() << ","
+                        << int(b->rssi_dBm) << "," << b->algorithm << "," << std::setprecision(3)
+                        << b->aoa_rad * toDeg << "," << b->aoaStd_rad * toDeg << ","
+                        << int(b->aoaAmbiguous) << "," << b->aoaMirror_rad * toDeg << ","
+                        << int(b->hasAod) << "," << b->aod_rad * toDeg << ","
+                        << b->aodStd_rad * toDeg << "," << b->aodMirror_rad * toDeg << ","
+                        << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
+                const bool picture =
+                    (argImages.isSet() || argRawlogImages.getValue()) &&
+                    (st.bearings - 1) % std::max(1u, argImageEvery.getValue()) == 0;
+                if (!picture) return;
+                const auto* prof = processor.estimator().lastProfile();
+                std::string mac = c.transmitter.asString();
+                std::replace(mac.begin(), mac.end(), ':', '-');
+                const mrpt::img::CImage csiImg =
+                    bearing::renderMagnitudePhase(*processor.lastFrame());
+                mrpt::img::CImage profImg;
+                if (prof)
+                    profImg = bearing::renderBearingProfile(
+                        *prof, processor.lastResult(),
+                        algo + ": " + prof->label + "  " + c.transmitter.asString());
+                if (argImages.isSet())
+                {
+                    const std::string stem = (fs::path(argImages.getValue()) /
+                                              (mac + "_" + std::to_string(st.bearings - 1)))
+                                                 .string();
+                    csiImg.saveToFile(stem + "_csi.png");
+                    if (prof) profImg.saveToFile(stem + "_profile.png");
+                    imagesTotal += prof ? 2 : 1;
+                }
+                if (argRawlogImages.getValue())
+                {
+                    extra.push_back(bearing::asImageObservation(
+                        csiImg, c.timestamp, c.sensorLabel + "_CSI_PLOT"));
+                    if (prof)
+                        extra.push_back(bearing::asImageObservation(
+                            profImg, c.timestamp, c.sensorLabel + "_PROFILE"));
+                }
+            };
+
+            std::vector<mrpt::obs::CObservation::Ptr> extra;
+            forEachObject(
+                argIn.getValue(),
+                [&](mrpt::serialization::CSerializable::Ptr& obj)
+                {
+                    if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
+                    {
+                        // Sensory-frame rawlogs: the new observations join the same frame.
+                        std::vector<mrpt::obs::CObservation::Ptr> added;
+                        for (const auto& o : *sf)
+                            if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+                            {
+                                extra.clear();
+                                handle(*c, extra);
+                                added.insert(added.end(), extra.begin(), extra.end());
+                            }
+                        for (auto& a : added) sf->insert(a);
+                        archive << *sf;
+                        return;
+                    }
+                    archive << *obj;
+                    if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
+                    {
+                        extra.clear();
+                        handle(*c, extra);
+                        for (const auto& e : extra) archive << *e;
+                    }
+                },
+                [&](double f)
+                {
+                    progress.update(
+                        f, std::to_string(csiSeen) + "/" + std::to_string(csiTotal) + " frames, " +
+                               std::to_string(bearingsTotal) + " bearings");
+                });
+            progress.done(std::to_string(bearingsTotal) + " bearings");
+            out.close();
+
+            // ---- summary
+            std::cout << "Input : " << argIn.getValue() << " (" << csiSeen << " CSI frames)\n"
+                      << "Array : " << rxArray.name << " (" << arrayPath << ")"
+                      << (rxArray.isLinear() ? ", linear: AoA has a mirror candidate" : "") << "\n"
+                      << "Calib : " << (calib.empty() ? "none (uncalibrated)" : calib.path())
+                      << "\n"
+                      << "Algo  : " << algo << "\n"
+                      << "Output: " << argOut.getValue() << " (" << bearingsTotal << " bearings)\n";
+            std::cout << "Bearings per transmitter:\n"
+                      << "  transmitter        frames  bearings  median AoA[deg]  median quality\n";
+            for (const auto& [mac, s] : stats)
+                std::cout << "  " << mac.asString() << "  " << std::setw(6) << s.frames << "  "
+                          << std::setw(8) << s.bearings << "  " << std::setw(15) << std::fixed
+                          << std::setprecision(1) << median(s.aoa_deg) << "  " << std::setw(14)
+                          << std::setprecision(2) << median(s.quality) << "\n";
+            uint64_t rejectedTotal = 0;
+            for (auto r : rejected) rejectedTotal += r;
+            std::cout << "Rejected frames: " << rejectedTotal << "\n";
+            for (size_t i = 1; i < kRejectReasonCount; ++i)
+                if (rejected[i])
+                    std::cout << "  " << toString(RejectReason(i)) << ": " << rejected[i] << "\n";
+            if (argImages.isSet())
+                std::cout << "Images: " << imagesTotal << " PNG files in " << argImages.getValue()
+                          << "\n";
+            if (csv.is_open()) std::cout << "CSV   : " << argCsv.getValue() << "\n";
+            return 0;
+        });
+}

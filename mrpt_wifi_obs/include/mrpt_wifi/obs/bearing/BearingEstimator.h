@@ -1,0 +1,146 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/containers/yaml.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+/** Bearing estimators: observation processors that turn preprocessed CSI into angles. */
+namespace mrpt_wifi::bearing
+{
+/** What an estimator found for one transmitter. Angles in radians; AoA in the receive array's
+ *  frame, AoD in the transmitter array's frame (DESIGN.md §6). */
+struct BearingResult
+{
+    bool valid = false;
+    double aoa_rad = 0;
+    double aoaStd_rad = 0;
+    /** Linear receive arrays: the mirror image of aoa_rad across the array axis, which fits the
+     *  CSI equally well. aoa_rad is the candidate in the array's front half-plane. */
+    double aoaMirror_rad = 0;
+    bool aoaAmbiguous = false;
+
+    bool hasAod = false;
+    double aod_rad = 0;
+    double aodStd_rad = 0;
+    double aodMirror_rad = 0;
+    bool aodAmbiguous = false;
+
+    bool hasDelay = false;
+    double delay_s = 0;  //!< of the chosen path, relative to the frame's mean delay
+
+    /** 0..1: fraction of the received power that one plane wave from the chosen direction
+     *  explains (1 for a clean single path, low for diffuse multipath or noise). */
+    double quality = 0;
+    unsigned framesUsed = 0;
+    unsigned pathsDetected = 0;  //!< signal-subspace dimension or peaks considered
+};
+
+/** A likelihood (or pseudo-spectrum) over bearing × delay, kept for pictures. 1-D estimators
+ *  leave `delays_s` with a single 0 entry. */
+struct BearingProfile
+{
+    std::vector<double> angles_rad;
+    std::vector<double> delays_s;
+    Eigen::MatrixXf values;  //!< [angle][delay], linear, ≥ 0
+    std::string label;       //!< "Bartlett power", "MUSIC pseudo-spectrum", ...
+    double peakAngle_rad = 0;
+    double peakDelay_s = 0;
+    bool hasPeak = false;
+};
+
+/** Options common to all estimators; each estimator reads the ones that apply to it (unknown
+ *  keys are an error). Angles in degrees and delays in ns in configs (human-facing). */
+struct EstimatorOptions
+{
+    unsigned angleBins = 180;   //!< `angle_bins`: grid over the search interval
+    unsigned delayBins = 180;   //!< `delay_bins`
+    double delayMin_ns = -100;  //!< `delay_min_ns`: delays are relative to the mean delay
+    double delayMax_ns = 150;   //!< `delay_max_ns`
+    /** `delay_decimation`: neighbouring subcarriers averaged before the 2-D profile's delay
+     *  transform (1 = none; 2 halves its cost, < 0.5 dB loss within ±150 ns). */
+    unsigned delayDecimation = 2;
+    unsigned window = 1;           //!< `window`: recent frames combined per estimate
+    unsigned frequencyGroups = 4;  //!< `frequency_groups`: sub-bands with their own wavelength
+    bool refine = true;            //!< `refine`: grid-free polish of the chosen peak
+    double stdFloor_deg = 0.5;     //!< `std_floor_deg`: model-error floor of the reported σ
+    bool keepProfile = false;      //!< `keep_profile`: keep the last profile (for images)
+    // Subspace methods
+    unsigned maxPaths = 3;         //!< `max_paths`: cap on the signal-subspace dimension
+    double subspaceThreshold = 8;  //!< `subspace_threshold`: eigenvalue / noise level ratio
+    // Windowed SVD
+    unsigned components = 1;  //!< `components`: principal components kept
+    // SpotFi
+    unsigned subcarrierStep = 4;        //!< `subcarrier_step`: decimation of the uniform grid
+    unsigned smoothingLength = 16;      //!< `smoothing_length`: subcarriers per smoothed vector
+    double directPathPowerRatio = 0.3;  //!< `direct_path_power_ratio`: peaks this strong compete
+    // AoD
+    std::string aodMethod = "bartlett";  //!< `aod_method`: bartlett | music
+
+    /** Reads a YAML map; throws std::invalid_argument naming an unknown key or a bad value.
+     *  `allowed`: keys this estimator understands. */
+    void load(
+        const mrpt::containers::yaml& params, const std::vector<std::string>& allowed,
+        const std::string& estimatorName);
+};
+
+/** Geometry an estimator needs: the receive array and, for AoD, the transmitter's array. */
+struct EstimatorContext
+{
+    const AntennaArray* rxArray = nullptr;
+    /** Array of a transmitter (by MAC); nullptr if unknown (no AoD then). */
+    std::function<const AntennaArray*(const MacAddress&)> txArrayOf;
+};
+
+/** One bearing estimator ("observation processor"): named, configurable, reusable across frames
+ *  (precomputed steering matrices per array × channel × grid; no allocation per frame once
+ *  warm). Not thread-safe: one instance per thread. */
+class BearingEstimator
+{
+public:
+    virtual ~BearingEstimator() = default;
+
+    /** Registered name ("aoa_only", "fft", ...). */
+    virtual std::string name() const = 0;
+    /** One line on what it does. */
+    virtual std::string description() const = 0;
+    /** Keys of EstimatorOptions it reads. */
+    virtual std::vector<std::string> parameterKeys() const = 0;
+
+    /** Applies a YAML map of options (see EstimatorOptions); throws std::invalid_argument. */
+    void configure(const mrpt::containers::yaml& params);
+    const EstimatorOptions& options() const { return opts_; }
+    EstimatorOptions& options() { return opts_; }
+
+    /** Frames the estimator wants from the transmitter's window. */
+    virtual size_t framesWanted() const { return opts_.window; }
+
+    /** Estimates from the given frames of one transmitter (oldest first; all of one shape).
+     *  Returns false (and result.valid = false) if it can't, e.g. too few antennas. */
+    virtual bool estimate(
+        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx,
+        BearingResult& result) = 0;
+
+    /** The last profile, if `keep_profile` is on and the estimator makes one. */
+    const BearingProfile* lastProfile() const { return hasProfile_ ? &profile_ : nullptr; }
+
+protected:
+    EstimatorOptions opts_;
+    BearingProfile profile_;
+    bool hasProfile_ = false;
+};
+
+/** Names of all estimators, in the order of the documentation. */
+std::vector<std::string> estimatorNames();
+/** Creates an estimator by name with options; throws std::invalid_argument listing the known
+ *  names for an unknown one. */
+std::unique_ptr<BearingEstimator> createEstimator(
+    const std::string& name, const mrpt::containers::yaml& params = mrpt::containers::yaml());
+
+}  // namespace mrpt_wifi::bearing

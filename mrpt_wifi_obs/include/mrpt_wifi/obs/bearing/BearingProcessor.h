@@ -1,0 +1,62 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+
+#include <map>
+#include <memory>
+#include <optional>
+
+namespace mrpt_wifi::bearing
+{
+/** The whole chain for a stream of CSI observations: preprocessing, one window per
+ *  transmitter, an estimator, and the bearing observation. Not thread-safe. */
+class BearingProcessor
+{
+public:
+    struct Options
+    {
+        size_t windowCapacity = 32;   //!< frames kept per transmitter
+        double windowMaxAge_s = 1.0;  //!< older frames are not combined
+        /** Estimate once every `stride` accepted frames of a transmitter (1: every frame). */
+        unsigned stride = 1;
+    };
+
+    BearingProcessor(
+        CsiPreprocessor preprocessor, std::unique_ptr<BearingEstimator> estimator, Options options);
+
+    /** Transmitter arrays for AoD: one per MAC, and/or a default for all. */
+    void setTransmitterArray(const MacAddress& mac, AntennaArray array);
+    void setDefaultTransmitterArray(AntennaArray array);
+
+    /** Runs the chain on one frame. Returns the bearing (sensor label: the CSI's + "_AOA"; its
+     *  CObservationBearingRange gets "_AOA_BEARING"), or nullptr when the frame was rejected
+     *  (`reason` says why), is not due (stride), or the estimator could not produce one. */
+    CObservationWiFiBearing::Ptr process(
+        const CObservationWiFiCSI& csi, RejectReason* reason = nullptr);
+
+    CsiPreprocessor& preprocessor() { return pre_; }
+    BearingEstimator& estimator() { return *est_; }
+    /** The preprocessed frame and the estimator's result of the last process() call. */
+    const CleanCsi* lastFrame() const { return lastFrame_; }
+    const BearingResult& lastResult() const { return lastResult_; }
+    const std::vector<const CleanCsi*>& lastWindow() const { return frames_; }
+
+private:
+    const AntennaArray* txArrayOf(const MacAddress& mac) const;
+
+    CsiPreprocessor pre_;
+    std::unique_ptr<BearingEstimator> est_;
+    Options opts_;
+    TransmitterWindows windows_;
+    std::map<MacAddress, AntennaArray> txArrays_;
+    std::optional<AntennaArray> defaultTxArray_;
+    std::map<MacAddress, unsigned> sinceLast_;
+    std::vector<const CleanCsi*> frames_;
+    const CleanCsi* lastFrame_ = nullptr;
+    BearingResult lastResult_;
+};
+
+}  // namespace mrpt_wifi::bearing

@@ -1,0 +1,251 @@
+/* mrpt_wifi — accuracy evaluation of the bearing estimators against the simulator's ground
+ * truth. Shared by the accuracy tests and the bearing-accuracy program. */
+#pragma once
+
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/Subcarriers.h>
+#include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+#include <mrpt_wifi/sim/Simulator.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi::test
+{
+enum class Environment
+{
+    LineOfSight,  //!< the scenario's room without reflections, scatterers or obstacles
+    Moderate,     //!< the scenario as written
+    Strong        //!< walls |Γ| = 0.7, scatterers 4× stronger
+};
+inline const char* toString(Environment e)
+{
+    return e == Environment::LineOfSight ? "LoS only"
+           : e == Environment::Moderate  ? "moderate multipath"
+                                         : "strong multipath";
+}
+
+struct AccuracyCase
+{
+    std::string scenarioFile;
+    Environment environment = Environment::Moderate;
+    double snr_dB = 20;
+    bool calibrated = true;
+    unsigned estimates = 150;   //!< spread evenly over the scenario's duration
+    unsigned windowFrames = 8;  //!< consecutive frames synthesised per estimate
+    std::string rxArrayFile;    //!< "" = the scenario's receiver array
+};
+
+/** Frames and truth of one case, made once and shared by all estimators. */
+struct AccuracyDataset
+{
+    AntennaArray rx;
+    std::map<MacAddress, AntennaArray> txArrays;
+    std::optional<PhaseCalibration> calibration;
+    std::vector<std::vector<CObservationWiFiCSI>> windows;  //!< oldest first
+    std::vector<sim::FrameTruth> truth;                     //!< of each window's last frame
+    double snr_dB = 0;
+};
+
+inline AntennaArray fromSimArray(const sim::AntennaArray& a)
+{
+    AntennaArray out;
+    out.name = a.name;
+    out.elements = a.elements;
+    out.sourcePath = a.sourcePath;
+    return out;
+}
+
+/** The simulator's true per-chain responses on a channel: what a perfect calibration recovers. */
+inline PhaseCalibration truthCalibration(
+    const sim::Simulator& simulator, const AntennaArray& rx, const Chanspec& cs)
+{
+    PhaseCalibration cal;
+    cal.device = rx.name;
+    cal.chanspec = cs;
+    cal.method = "simulator ground truth (scenario " + simulator.scenario().name + ")";
+    cal.subcarriers = dataSubcarriers(cs.bandwidthMHz);
+    for (size_t i = 0; i < rx.size(); ++i)
+    {
+        const auto& ch = simulator.hardware().chain(cs, unsigned(i));
+        std::vector<double> row;
+        for (int k : cal.subcarriers) row.push_back(ch.phase_rad(k, cs.nfft()));
+        cal.phases_rad.push_back(row);
+        cal.gains_dB.push_back(ch.gain_dB);
+    }
+    return cal;
+}
+
+inline AccuracyDataset makeDataset(const AccuracyCase& c)
+{
+    sim::Scenario sc = sim::Scenario::fromYamlFile(c.scenarioFile);
+    if (!c.rxArrayFile.empty()) sc.receiver.array = sim::AntennaArray::fromYamlFile(c.rxArrayFile);
+    sc.impairments.fixedSnr_dB = c.snr_dB;
+    if (c.environment == Environment::LineOfSight)
+    {
+        sc.propagation.maxReflectionOrder = 0;
+        sc.scatterers.clear();
+        sc.obstacles.clear();
+    }
+    else if (c.environment == Environment::Strong)
+    {
+        for (auto& w : sc.walls) w.reflection = std::polar(0.7, M_PI);
+        for (auto& s : sc.scatterers) s.radarCrossSection_m2 *= 4;
+    }
+    sim::Simulator simulator(sc);
+
+    AccuracyDataset d;
+    d.snr_dB = c.snr_dB;
+    d.rx = fromSimArray(sc.receiver.array);
+    for (const auto& t : sc.transmitters) d.txArrays[t.mac] = fromSimArray(t.array);
+    if (c.calibrated)
+        d.calibration = truthCalibration(simulator, d.rx, sc.transmitters.front().chanspec);
+    const size_t nTx = sc.transmitters.size();
+    for (unsigned e = 0; e < c.estimates; ++e)
+    {
+        const size_t tx = e % nTx;
+        const double t = (e + 0.5) / c.estimates * (sc.duration_s - 1.0);
+        const uint64_t first = simulator.firstFrameAtOrAfter(tx, t);
+        std::vector<CObservationWiFiCSI> w(c.windowFrames);
+        sim::FrameTruth truth;
+        for (unsigned n = 0; n < c.windowFrames; ++n)
+            simulator.synthesizeFrame(tx, first + n, w[n], truth);
+        d.windows.push_back(std::move(w));
+        d.truth.push_back(truth);
+    }
+    return d;
+}
+
+struct AccuracyStats
+{
+    std::string algorithm;
+    size_t count = 0;
+    double median_deg = NAN, p90_deg = NAN;
+    double crbMedian_deg = NAN;
+    double errorOverCrbRms = NAN;  //!< √mean((error / CRB)²)
+    /** The same within ±60° of broadside: beyond, the rt-ac86u's 26 mm spacing (> λ/2 at
+     *  5.8 GHz) aliases one endfire onto the other and the local bound does not apply. */
+    double errorOverCrbRmsCentral = NAN;
+    double centralMedian_deg = NAN;
+    size_t centralCount = 0;
+    size_t aodCount = 0;
+    double aodMedian_deg = NAN, aodP90_deg = NAN;
+    double meanQuality = NAN;
+    double meanStd_deg = NAN;       //!< reported σ, to compare with the errors
+    double withinThreeSigma = NAN;  //!< fraction of estimates with error ≤ 3 × reported σ
+};
+
+inline double percentile(std::vector<double> v, double p)
+{
+    if (v.empty()) return NAN;
+    std::sort(v.begin(), v.end());
+    const double pos = p * double(v.size() - 1);
+    const size_t i = size_t(pos);
+    return i + 1 < v.size() ? v[i] + (pos - double(i)) * (v[i + 1] - v[i]) : v[i];
+}
+
+/** Runs one estimator on a dataset. Linear arrays: error to the nearer of the two reported
+ *  mirror candidates (resolving the mirror needs motion or a 2-D array, not this estimator). */
+inline AccuracyStats evaluate(
+    const AccuracyDataset& d, const std::string& algo,
+    const mrpt::containers::yaml& params = mrpt::containers::yaml())
+{
+    auto est = bearing::createEstimator(algo, params);
+    CsiPreprocessor pre(
+        {}, d.rx,
+        d.calibration ? CalibrationStore::fromCalibration(*d.calibration) : CalibrationStore());
+    std::vector<CleanCsi> clean;
+    std::vector<const CleanCsi*> ptrs;
+    bearing::EstimatorContext ctx;
+    ctx.rxArray = &d.rx;
+    ctx.txArrayOf = [&](const MacAddress& m) -> const AntennaArray*
+    {
+        const auto it = d.txArrays.find(m);
+        return it == d.txArrays.end() ? nullptr : &it->second;
+    };
+    size_t inside = 0;
+    std::vector<double> errors, crbs, ratios, centralRatios, centralErrors, aodErrors, quality,
+        stds;
+    for (size_t e = 0; e < d.windows.size(); ++e)
+    {
+        const auto& w = d.windows[e];
+        const size_t use = std::min<size_t>(est->framesWanted(), w.size());
+        clean.resize(use);
+        ptrs.clear();
+        for (size_t n = 0; n < use; ++n)
+        {
+            if (pre.process(w[w.size() - use + n], clean[n]) != RejectReason::Accepted) continue;
+            ptrs.push_back(&clean[n]);
+        }
+        bearing::BearingResult r;
+        if (ptrs.empty() || !est->estimate(ptrs, ctx, r) || !r.valid) continue;
+        const auto& truth = d.truth[e];
+        double err = angleDistance(r.aoa_rad, truth.aoa_rad);
+        if (r.aoaAmbiguous) err = std::min(err, angleDistance(r.aoaMirror_rad, truth.aoa_rad));
+        const auto& layout = *ptrs.back()->layout;
+        double streams = 0;
+        for (const auto* p : ptrs) streams += p->nTx;
+        const double crb = d.rx.aoaCramerRaoBound(
+            truth.aoa_rad, layout.frequencies_Hz, std::pow(10.0, d.snr_dB / 10), streams);
+        errors.push_back(err * 180 / M_PI);
+        crbs.push_back(crb * 180 / M_PI);
+        ratios.push_back(err / crb);
+        const double offBroadside = std::min(
+            angleDistance(truth.aoa_rad, d.rx.broadside()),
+            angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
+        if (offBroadside <= M_PI / 3)
+        {
+            centralRatios.push_back(err / crb);
+            centralErrors.push_back(err * 180 / M_PI);
+        }
+        quality.push_back(r.quality);
+        stds.push_back(r.aoaStd_rad * 180 / M_PI);
+        if (err <= 3 * r.aoaStd_rad) ++inside;
+        if (r.hasAod)
+        {
+            double ae = angleDistance(r.aod_rad, truth.aod_rad);
+            if (r.aodAmbiguous) ae = std::min(ae, angleDistance(r.aodMirror_rad, truth.aod_rad));
+            aodErrors.push_back(ae * 180 / M_PI);
+        }
+    }
+    AccuracyStats s;
+    s.algorithm = algo;
+    s.count = errors.size();
+    s.median_deg = percentile(errors, 0.5);
+    s.p90_deg = percentile(errors, 0.9);
+    s.crbMedian_deg = percentile(crbs, 0.5);
+    double sq = 0;
+    for (double r : ratios) sq += r * r;
+    s.errorOverCrbRms = ratios.empty() ? NAN : std::sqrt(sq / double(ratios.size()));
+    double csq = 0;
+    for (double r : centralRatios) csq += r * r;
+    s.errorOverCrbRmsCentral =
+        centralRatios.empty() ? NAN : std::sqrt(csq / double(centralRatios.size()));
+    s.centralMedian_deg = percentile(centralErrors, 0.5);
+    s.centralCount = centralErrors.size();
+    s.aodCount = aodErrors.size();
+    s.aodMedian_deg = percentile(aodErrors, 0.5);
+    s.aodP90_deg = percentile(aodErrors, 0.9);
+    double qs = 0, ss = 0;
+    for (double q : quality) qs += q;
+    for (double x : stds) ss += x;
+    s.meanQuality = quality.empty() ? NAN : qs / double(quality.size());
+    s.meanStd_deg = stds.empty() ? NAN : ss / double(stds.size());
+    s.withinThreeSigma = errors.empty() ? NAN : double(inside) / double(errors.size());
+    return s;
+}
+
+inline std::string scenarioPath(const std::string& name)
+{
+    return std::string(MRPT_WIFI_SOURCE_DIR) + "/share/scenarios/" + name + ".yaml";
+}
+inline std::string arrayPath(const std::string& name)
+{
+    return std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/" + name + ".yaml";
+}
+
+}  // namespace mrpt_wifi::test

@@ -1,0 +1,101 @@
+/* Bearing accuracy against the simulator's ground truth (issue 5 targets). The simulator's true
+ * per-chain offsets stand in for a calibration (the calibration tool is another issue). */
+#include <gtest/gtest.h>
+
+#include "BearingAccuracy.h"
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::test;
+
+namespace
+{
+AccuracyDataset dataset(const std::string& scenario, Environment env, double snr, bool calibrated)
+{
+    AccuracyCase c;
+    c.scenarioFile = scenarioPath(scenario);
+    c.environment = env;
+    c.snr_dB = snr;
+    c.calibrated = calibrated;
+    c.estimates = 150;
+    return makeDataset(c);
+}
+
+void record(const AccuracyStats& s, const std::string& tag)
+{
+    ::testing::Test::RecordProperty(
+        tag + "_" + s.algorithm + "_median_deg", std::to_string(s.median_deg));
+    ::testing::Test::RecordProperty(
+        tag + "_" + s.algorithm + "_p90_deg", std::to_string(s.p90_deg));
+}
+}  // namespace
+
+TEST(BearingAccuracy, CalibratedModerateMultipathBestMedianWithinTwoDegrees)
+{
+    const auto d = dataset("bearing", Environment::Moderate, 20, true);
+    double best = INFINITY;
+    std::string bestName;
+    for (const auto& n : bearing::estimatorNames())
+    {
+        const AccuracyStats s = evaluate(d, n);
+        ASSERT_GE(s.count, 140u) << n;
+        record(s, "moderate20");
+        std::cout << n << ": median " << s.median_deg << " p90 " << s.p90_deg << " deg\n";
+        if (s.median_deg < best) best = s.median_deg, bestName = n;
+    }
+    std::cout << "best: " << bestName << " " << best << " deg\n";
+    EXPECT_LE(best, 2.0);
+}
+
+TEST(BearingAccuracy, LineOfSightWithinTwiceTheCramerRaoBound)
+{
+    for (double snr : {10.0, 20.0, 30.0})
+    {
+        const auto d = dataset("bearing", Environment::LineOfSight, snr, true);
+        for (const char* algo : {"aoa_only", "music", "fft"})
+        {
+            const AccuracyStats s = evaluate(d, algo);
+            std::cout << algo << " @" << snr << " dB: median " << s.median_deg << " CRB "
+                      << s.crbMedian_deg << " err/CRB(±60°) " << s.errorOverCrbRmsCentral
+                      << " over " << s.centralCount << "\n";
+            ASSERT_GE(s.centralCount, 50u);
+            EXPECT_LE(s.errorOverCrbRmsCentral, 2.0) << algo << " at " << snr << " dB";
+        }
+    }
+}
+
+TEST(BearingAccuracy, ReportedSigmaCoversTheErrors)
+{
+    for (Environment env : {Environment::LineOfSight, Environment::Moderate})
+    {
+        const auto d = dataset("bearing", env, 20, true);
+        for (const char* algo : {"aoa_only", "fft", "spotfi"})
+        {
+            const AccuracyStats s = evaluate(d, algo);
+            EXPECT_GE(s.withinThreeSigma, 0.8) << algo << " in " << toString(env);
+        }
+    }
+}
+
+TEST(BearingAccuracy, UncalibratedIsFarWorseForTheRecord)
+{
+    const auto d = dataset("bearing", Environment::Moderate, 20, false);
+    double best = INFINITY;
+    for (const auto& n : bearing::estimatorNames())
+        best = std::min(best, evaluate(d, n).median_deg);
+    std::cout << "uncalibrated best median " << best << " deg\n";
+    EXPECT_GT(best, 10.0);
+}
+
+TEST(BearingAccuracy, AngleOfDepartureOnTheKidnappedScenario)
+{
+    const auto params = mrpt::containers::yaml::FromText("window: 4");
+    const AccuracyStats los =
+        evaluate(dataset("kidnapped", Environment::LineOfSight, 20, true), "aod", params);
+    const AccuracyStats mp =
+        evaluate(dataset("kidnapped", Environment::Moderate, 20, true), "aod", params);
+    std::cout << "AoD LoS median " << los.aodMedian_deg << ", multipath median " << mp.aodMedian_deg
+              << " p90 " << mp.aodP90_deg << "\n";
+    EXPECT_GE(los.aodCount, 140u);
+    EXPECT_LE(los.aodMedian_deg, 0.5);
+    EXPECT_LE(mp.aodMedian_deg, 5.0);
+}
