@@ -15,7 +15,26 @@ namespace mrpt_wifi::sim
 {
 namespace detail
 {
-AntennaArray readAntennaArray(const YamlNode& n);  // AntennaArray.cpp
+/** An inline array map {name, description, elements}, with errors at its YAML line (array
+ * files go through AntennaArray::fromYamlFile). */
+AntennaArray readAntennaArray(const YamlNode& n)
+{
+    n.allowOnly({"name", "description", "elements"});
+    AntennaArray a;
+    a.name = n.stringOr("name", "unnamed");
+    a.description = n.stringOr("description", "");
+    const YamlNode elems = n["elements"];
+    if (!elems.isSequence() || elems.size() == 0)
+        elems.fail("expected a non-empty list of [x, y] element positions in metres");
+    for (size_t i = 0; i < elems.size(); ++i) a.elements.push_back(elems.at(i).asPoint2D());
+    for (size_t i = 0; i < a.elements.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (a.elements[i] == a.elements[j])
+                elems.at(i).fail(
+                    "element " + std::to_string(i) + " coincides with element " +
+                    std::to_string(j));
+    return a;
+}
 }
 
 using detail::YamlNode;
