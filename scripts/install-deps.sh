@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libceres-dev libopencv-dev
   libgtest-dev libgmock-dev libbenchmark-dev libpcap-dev
   openssh-server openssh-client tcpdump
+  gnuplot-nox
 )
 
 missing=()

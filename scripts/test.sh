@@ -28,13 +28,16 @@ else
   echo "Release build FAILED"; failed=$((failed + 1))
 fi
 
-echo "== [2/3] ASan + UBSan build, unit tests"
-# Integration tests load our (instrumented) plugin into Debian's uninstrumented MRPT apps,
-# which ASan does not allow; they ran in step 1.
+echo "== [2/3] ASan + UBSan build, unit suites"
+# The unit suites of every library, instrumented. Integration tests load our (instrumented)
+# plugin into Debian's uninstrumented MRPT apps, which ASan does not allow: they ran in step 1.
+asan_targets="test_obs test_sensor_decoding test_driver_units test_emulator_unit test_sim test_bearings test_calib test_localization"
 if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMRPT_WIFI_SANITIZE=ON \
-     -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null && cmake --build build-asan -j"$(nproc)"; then
+     -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null &&
+   cmake --build build-asan -j"$(nproc)" --target $asan_targets; then
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan --output-on-failure -j2 -LE integration --timeout 900 2>&1 | tee build-asan/ctest.log
+    ctest --test-dir build-asan --output-on-failure -j2 -L "unit|sim|bearings|calib|localization" \
+      -LE integration -E "_NOT_BUILT" --timeout 900 2>&1 | tee build-asan/ctest.log
   count_ctest build-asan/ctest.log
 else
   echo "ASan build FAILED"; failed=$((failed + 1))

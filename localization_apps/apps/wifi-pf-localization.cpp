@@ -1,0 +1,352 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * wifi-pf-localization: MRPT's pf-localization (mrpt::apps::MonteCarloLocalization_Rawlog, same
+ * .ini) linked with the WiFi bearing map, plus what a user wants around it: bearings from a CSV
+ * and odometry from a TUM file instead of a rawlog, input checks with counted warnings, the
+ * estimated trajectory as TUM, errors against ground truth, time to converge, plots. */
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/apps/MonteCarloLocalization_App.h>
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/vector_loadsave.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/system/CTicTac.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/Plot.h>
+#include <mrpt_wifi/localization/RawlogIO.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+
+#include <cmath>
+#include <fstream>
+#include <iostream>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+
+namespace
+{
+/** MRPT's app with a progress line: counts what the data source hands to the filter. */
+class ProgressMcl : public mrpt::apps::MonteCarloLocalization_Rawlog
+{
+public:
+    ProgressMcl(double t0, double t1, bool show) : progress_("wifi-pf-localization", show)
+    {
+        t0_ = t0, t1_ = t1;
+    }
+    size_t steps = 0;
+    void finish() { progress_.done(std::to_string(steps) + " filter steps"); }
+
+protected:
+    bool impl_get_next_observations(
+        mrpt::obs::CActionCollection::Ptr& action, mrpt::obs::CSensoryFrame::Ptr& observations,
+        mrpt::obs::CObservation::Ptr& observation) override
+    {
+        const bool ok =
+            DataSourceRawlog::impl_get_next_observations(action, observations, observation);
+        // Odometry readings only become the next step's action: not a filter step.
+        if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry) &&
+            observation->timestamp != INVALID_TIMESTAMP && t1_ > t0_)
+        {
+            ++steps;
+            const double t = mrpt::Clock::toDouble(observation->timestamp);
+            progress_.update((t - t0_) / (t1_ - t0_), std::to_string(steps) + " steps");
+        }
+        return ok;
+    }
+
+private:
+    cli::Progress progress_;
+    double t0_ = 0, t1_ = 0;
+};
+
+std::string fmt(double v, int prec = 3)
+{
+    char b[64];
+    std::snprintf(b, sizeof(b), "%.*f", prec, v);
+    return b;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return cli::runMain(
+        "wifi-pf-localization",
+        [&]
+        {
+            TCLAP::CmdLine cmd(
+                "Global (kidnapped-robot) localization with MRPT's particle filter and the WiFi "
+                "bearing map. Takes the same .ini as pf-localization (see "
+                "share/localization/pf-localization-wifi.ini) and a rawlog of bearing + odometry "
+                "observations, or a bearings CSV + odometry TUM file.",
+                ' ', "0.1");
+            TCLAP::UnlabeledValueArg<std::string> argIni(
+                "config", "pf-localization .ini", true, "", "CONFIG.ini", cmd);
+            TCLAP::UnlabeledValueArg<std::string> argRawlog(
+                "rawlog", "Rawlog with CObservationWiFiBearing + CObservationOdometry", false, "",
+                "IN.rawlog", cmd);
+            TCLAP::ValueArg<std::string> argCsv(
+                "b", "bearings-csv", "Bearings CSV (instead of a rawlog; needs --odometry-tum)",
+                false, "", "B.csv", cmd);
+            TCLAP::ValueArg<std::string> argOdo(
+                "", "odometry-tum", "Odometry as a TUM file (with --bearings-csv)", false, "",
+                "ODO.txt", cmd);
+            TCLAP::ValueArg<std::string> argPose(
+                "", "sensor-pose",
+                "Receive array on the robot for CSV bearings: x y z yaw pitch roll (m, deg)", false,
+                "0 0 0 0 0 0", "x y z yaw pitch roll", cmd);
+            TCLAP::ValueArg<std::string> argGt(
+                "g", "ground-truth-tum", "True robot trajectory (TUM) for errors and plots", false,
+                "", "GT.txt", cmd);
+            TCLAP::ValueArg<std::string> argOut(
+                "o", "out-dir", "Output folder", false, "wifi-pf-out", "DIR", cmd);
+            TCLAP::ValueArg<std::string> argMap(
+                "m", "map", "Transmitters YAML (overrides transmitters_file of the .ini)", false,
+                "", "TX.yaml", cmd);
+            TCLAP::ValueArg<int> argParticles(
+                "n", "particles", "Overrides particles_count of the .ini", false, 0, "N", cmd);
+            TCLAP::ValueArg<double> argThr(
+                "", "converged-threshold", "Error [m] below which the filter counts as converged",
+                false, 1.0, "M", cmd);
+            TCLAP::ValueArg<double> argHold(
+                "", "converged-hold", "... and must stay for this long [s]", false, 5.0, "S", cmd);
+            TCLAP::ValueArg<double> argSkip(
+                "", "skip",
+                "Drop the first S seconds of bearings: the filter starts (uniformly, lost) there, "
+                "as if the robot had been kidnapped to wherever it is at that time",
+                false, 0.0, "S", cmd);
+            TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
+            TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
+
+            cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
+            if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
+                return rc;
+
+            const std::string outDir = argOut.getValue();
+            mrpt::system::createDirectory(outDir);
+            if (!mrpt::system::directoryExists(outDir))
+                throw std::runtime_error("cannot create " + outDir);
+
+            // ---- The map, exactly as the filter will build it from the .ini. A relative
+            // transmitters_file that isn't there from the working directory is taken relative
+            // to the .ini (pf-localization itself only looks in the working directory).
+            mrpt::config::CConfigFileMemory ini;
+            ini.setContent(mrpt::io::file_get_contents(argIni.getValue()));
+            const std::string mapSect = "MetricMap_wifiBearingMap_00_creationOpts";
+            std::string txFile = ini.read_string(mapSect, "transmitters_file", "");
+            if (argMap.isSet()) txFile = argMap.getValue();
+            if (!txFile.empty() && txFile[0] != '/' && !mrpt::system::fileExists(txFile))
+            {
+                const std::string alt =
+                    mrpt::system::extractFileDirectory(argIni.getValue()) + "/" + txFile;
+                if (mrpt::system::fileExists(alt)) txFile = alt;
+            }
+            if (!txFile.empty()) ini.write(mapSect, "transmitters_file", txFile);
+            mrpt::maps::TSetOfMetricMapInitializers mapInits;
+            mapInits.loadFromConfigFile(ini, "MetricMap");
+            mrpt::maps::CMultiMetricMap probe;
+            probe.setListOfMaps(mapInits);
+            const auto wifiMap = probe.mapByClass<CWiFiBearingMap>();
+            if (!wifiMap)
+                throw std::runtime_error(
+                    argIni.getValue() +
+                    ": the [MetricMap] section creates no wifiBearingMap (wifiBearingMap_count=1 "
+                    "missing?)");
+            const auto& txs = wifiMap->transmitters();
+
+            // ---- The input.
+            std::string rawlog = argRawlog.getValue();
+            std::vector<BearingRecord> bearings;
+            Trajectory2D odo;
+            InputWarnings warn;
+            size_t otherObs = 0;
+            if (argCsv.isSet())
+            {
+                if (!rawlog.empty())
+                    throw std::invalid_argument("give a rawlog or --bearings-csv, not both");
+                if (!argOdo.isSet())
+                    throw std::invalid_argument("--bearings-csv needs --odometry-tum");
+                BearingCsvOptions co;
+                const auto sp = cli::poseFromText(argPose.getValue(), "--sensor-pose");
+                co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
+                co.names = &txs;
+                bearings = readBearingCsv(argCsv.getValue(), co, &warn);
+                odo = Trajectory2D::fromTumFile(argOdo.getValue());
+            }
+            else
+            {
+                if (rawlog.empty())
+                    throw std::invalid_argument("give a rawlog or --bearings-csv + --odometry-tum");
+                auto c = readRawlog(rawlog);
+                bearings = std::move(c.bearings);
+                odo = std::move(c.odometry);
+                otherObs = c.otherObservations;
+                if (otherObs)
+                    std::cerr << "note: " << otherObs
+                              << " other observations (CSI, ...) in the rawlog are left out of "
+                                 "the filter's input (each would be a step without "
+                                 "information)\n";
+            }
+            if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
+            if (odo.empty())
+                std::cerr << "warning: no odometry: the filter will use the .ini's "
+                             "[DummyOdometryParams] motion noise only\n";
+            std::vector<BearingRecord> usable;
+            const double tSkip = bearings.front().t + argSkip.getValue();
+            for (const auto& b : bearings)
+            {
+                if (b.t < tSkip) continue;
+                if (!txs.find(b.transmitter))
+                {
+                    warn.unknownTransmitter++;
+                    continue;
+                }
+                if (!odo.empty() && (b.t < odo.t.front() || b.t > odo.t.back()))
+                {
+                    warn.outsideTrajectory++;
+                    continue;
+                }
+                usable.push_back(b);
+            }
+            if (usable.empty())
+                throw std::runtime_error(
+                    "no usable bearings: " + warn.summary() +
+                    " (check the map's MACs and that odometry and bearings overlap in time)");
+            if (argCsv.isSet() || warn.total() || otherObs || argSkip.getValue() > 0)
+            {
+                // The filter reads a rawlog: write the checked input as one.
+                rawlog = outDir + "/input.rawlog";
+                Trajectory2D odoUsed;  // odometry from the first used bearing on
+                for (size_t i = 0; i < odo.size(); ++i)
+                    if (i + 1 >= odo.size() || odo.t[i + 1] >= usable.front().t)
+                        odoUsed.push_back(odo.t[i], odo.poses[i]);
+                writePfRawlog(rawlog, usable, odoUsed);
+            }
+
+            // ---- Run MRPT's Monte Carlo localization app.
+            const double t0 = usable.front().t, t1 = usable.back().t;
+            ProgressMcl app(t0, t1, !argQuiet.getValue());
+            app.setMinLoggingLevel(mrpt::system::LVL_WARN);
+            app.allow_quit_on_esc_key = false;
+            app.fill_out_estimated_path = true;
+            {
+                const std::string iniPath = argIni.getValue();
+                const char* a[] = {"wifi-pf-localization", iniPath.c_str(), rawlog.c_str()};
+                app.initialize(3, a);
+            }
+            const auto sect = mrpt::apps::MonteCarloLocalization_Base::sect;
+            if (argParticles.isSet())
+                app.params.write(sect, "particles_count", argParticles.getValue());
+            app.params.write(sect, "logOutput_dir", outDir + "/mrpt");
+            if (!txFile.empty()) app.params.write(mapSect, "transmitters_file", txFile);
+            const auto counts = app.params.read_string(sect, "particles_count", "", true);
+            mrpt::system::CTicTac timer;
+            app.run();
+            const double runTime = timer.Tac();
+            app.finish();
+
+            Trajectory2D est;
+            for (const auto& [t, p] : app.out_estimated_path)
+                est.push_back(mrpt::Clock::toDouble(t), mrpt::math::TPose2D(p.x, p.y, p.yaw));
+            est.saveTum(outDir + "/estimate_tum.txt", "wifi-pf-localization estimate (PF mean)");
+
+            std::ostringstream sum;
+            sum << "wifi-pf-localization summary\n"
+                << "  input          : " << usable.size() << " bearings of " << txs.size()
+                << " known transmitters, " << odo.size() << " odometry readings\n"
+                << "  warnings       : " << warn.summary() << "\n"
+                << "  particles      : " << counts << "\n"
+                << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
+                << fmt(app.steps / std::max(runTime, 1e-9), 1) << " steps/s)\n"
+                << "  map warnings   : " << wifiMap->unknownTransmitterCount() << "\n";
+            if (argGt.isSet())
+            {
+                const auto gt = Trajectory2D::fromTumFile(argGt.getValue());
+                std::vector<double> times, errs;
+                for (size_t i = 0; i < est.size(); ++i)
+                {
+                    mrpt::math::TPose2D g;
+                    if (!gt.interpolate(est.t[i], g, 0.5)) continue;
+                    times.push_back(est.t[i] - t0);
+                    errs.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
+                }
+                if (errs.empty())
+                    throw std::runtime_error("the ground truth doesn't overlap the estimate");
+                // Converged: first time after which the error stays below the threshold for
+                // `hold` seconds.
+                double tc = -1;
+                for (size_t i = 0; i < errs.size() && tc < 0; ++i)
+                {
+                    size_t j = i;
+                    while (j < errs.size() && errs[j] < argThr.getValue() &&
+                           times[j] - times[i] < argHold.getValue())
+                        ++j;
+                    if (j < errs.size() && errs[j] < argThr.getValue()) tc = times[i];
+                }
+                std::vector<double> after;
+                for (size_t i = 0; i < errs.size(); ++i)
+                    if (tc >= 0 && times[i] >= tc) after.push_back(errs[i]);
+                const auto all = computeStats(errs), conv = computeStats(after);
+                {
+                    std::ofstream f(outDir + "/errors.csv");
+                    f << "t_s,position_error_m\n";
+                    for (size_t i = 0; i < errs.size(); ++i)
+                        f << times[i] << "," << errs[i] << "\n";
+                }
+                sum << "  error (all)    : " << all.asString() << "\n";
+                if (tc >= 0)
+                    sum << "  converged after: " << fmt(tc, 2) << " s (error < "
+                        << argThr.getValue() << " m for " << argHold.getValue() << " s)\n"
+                        << "  after converged: " << conv.asString() << "\n"
+                        << "  target         : median after convergence <= 0.5 m (WiROS 1.2 m): "
+                        << (conv.median <= 0.5 ? "MET" : "NOT MET") << "\n";
+                else
+                    sum << "  converged after: never (error never stayed < " << argThr.getValue()
+                        << " m for " << argHold.getValue() << " s)\n";
+
+                if (!argNoPlots.getValue())
+                {
+                    std::string err;
+                    plot::Figure traj;
+                    traj.title = "wifi-pf-localization: estimate vs ground truth";
+                    traj.xlabel = "x [m]", traj.ylabel = "y [m]", traj.equalAxes = true;
+                    plot::Series g{"ground truth", {}, {}, "lines lw 2 lc rgb '#333333'"};
+                    for (const auto& p : gt.poses) g.x.push_back(p.x), g.y.push_back(p.y);
+                    plot::Series e{"PF mean", {}, {}, "lines lw 1 lc rgb '#d62728'"};
+                    for (const auto& p : est.poses) e.x.push_back(p.x), e.y.push_back(p.y);
+                    plot::Series a{"access points", {}, {}, "points pt 5 ps 2 lc rgb '#1f77b4'"};
+                    for (const auto& t : txs.transmitters())
+                        a.x.push_back(t.pose.x), a.y.push_back(t.pose.y);
+                    traj.series = {g, e, a};
+                    if (!plot::savePng(traj, outDir + "/trajectory.png", &err))
+                        std::cerr << "warning: " << err << "\n";
+                    plot::Figure et;
+                    et.title = "Position error over time";
+                    et.xlabel = "time [s]", et.ylabel = "error [m]";
+                    et.series = {{"PF mean error", times, errs, "lines lw 1"}};
+                    if (tc >= 0)
+                        et.extra.push_back(
+                            "set arrow from " + fmt(tc) + ", graph 0 to " + fmt(tc) +
+                            ", graph 1 nohead dt 2 lc rgb 'black'\nset label 'converged' at " +
+                            fmt(tc) + ", graph 0.95 offset 0.5,0");
+                    et.extra.push_back("set logscale y");
+                    plot::savePng(et, outDir + "/error_time.png", &err);
+                    plot::Figure cdf;
+                    cdf.title = "Position error CDF after convergence";
+                    cdf.xlabel = "error [m]", cdf.ylabel = "fraction";
+                    cdf.series = {plot::cdf(after.empty() ? errs : after, "wifi-pf-localization")};
+                    cdf.extra.push_back(
+                        "set xrange [0:1.4<*]\nset arrow from 1.2, graph 0 to 1.2, graph 1 nohead "
+                        "dt 2\n"
+                        "set label 'WiROS median 1.2 m' at 1.2, graph 0.5 offset 0.5,0");
+                    plot::savePng(cdf, outDir + "/error_cdf.png", &err);
+                }
+            }
+            std::cout << sum.str();
+            std::ofstream(outDir + "/summary.txt") << sum.str();
+            return 0;
+        });
+}

@@ -1,0 +1,74 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/graphs/CNetworkOfPoses.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi::localization
+{
+struct GraphSlamOptions
+{
+    double nodePeriod_s = 0.5;  //!< a pose node every this much odometry time
+    // Odometry edge noise per edge: σ = max(floor, k·sqrt(distance)) (+ rotation term for yaw)
+    double odoSigmaXY_perSqrtM = 0.02;
+    double odoSigmaYaw_perSqrtM = 0.0175;  //!< rad/√m (1°)
+    double odoSigmaYaw_perSqrtRad = 0.02;
+    double odoSigmaXY_min = 0.005, odoSigmaYaw_min = 0.002;
+
+    bool useAoa = true, useAod = true;
+    double minStd_rad = 0.0349;  //!< floor on bearing σ (2°)
+    double stdScale = 1.0;
+    std::string loss = "cauchy";  //!< robust loss of bearing edges: cauchy | huber | none
+    double lossScale = 1.0;       //!< in units of σ
+
+    /** Known APs: stay fixed and define the world frame (the trajectory's initial placement is
+     *  found by a global search). Unknown: APs are estimated, gauge = first pose fixed. */
+    bool apsKnown = false;
+    int maxIterations = 100;
+    int threads = 2;
+    bool verbose = false;
+};
+
+/** The problem: odometry (trajectory in its own frame) or an existing MRPT pose graph with node
+ *  times, bearings, and (optionally) the APs. */
+struct GraphSlamInput
+{
+    Trajectory2D odometry;  //!< always: node times and odometry between them
+    /** Optional: odometry edges (and node poses) from an MRPT .graph whose node k is at
+     *  `odometry.t[k]` (then nodePeriod_s is not used). */
+    const mrpt::graphs::CNetworkOfPoses2DInf* graph = nullptr;
+    std::vector<BearingRecord> bearings;
+    TransmitterMap aps;  //!< known poses (apsKnown) or names/arrays only; may be empty if unknown
+};
+
+struct GraphSlamResult
+{
+    Trajectory2D poses;         //!< node poses, solved
+    Trajectory2D initialPoses;  //!< node poses before optimisation (odometry, placed)
+    TransmitterMap aps;         //!< solved (or fixed) APs
+    mrpt::graphs::CNetworkOfPoses2DInf graph;  //!< poses + AP vertices, odometry edges
+    size_t aoaEdges = 0, aodEdges = 0, odometryEdges = 0;
+    InputWarnings warnings;
+    size_t apsWithoutBearings = 0;
+    double initialCost = 0, finalCost = 0, solveTime_s = 0, totalTime_s = 0;
+    int iterations = 0;
+    std::string solverReport;
+};
+
+/** Builds and solves the graph (Ceres). Throws std::runtime_error on an empty odometry, no usable
+ *  bearings, an unconnected graph (.graph input) or bearings that never overlap the odometry. */
+GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt);
+
+/** Global placement of an odometry trajectory in the frame of known APs: the rigid transform
+ *  maximising the robust bearing likelihood of the bearings in the first `window_s` seconds
+ *  (grid over position and yaw, then a finer grid). */
+mrpt::math::TPose2D placeTrajectory(
+    const Trajectory2D& odometry, const std::vector<BearingRecord>& bearings,
+    const TransmitterMap& aps, double window_s = 30);
+
+}  // namespace mrpt_wifi::localization

@@ -1,0 +1,77 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPose2D.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+
+#include <cmath>
+
+namespace mrpt_wifi::localization
+{
+/** Robust measurement model of one bearing: a Gaussian on the wrapped residual mixed with a
+ *  uniform density over the circle for outliers (multipath, wrong peaks),
+ *  p(r) = (1 − ε)·N(r; 0, σ²) + ε/(2π), σ = max(σ_min, scale·σ_reported).
+ *  Linear arrays report an unordered pair {θ, mirror}: p = ½·(p(r_θ) + p(r_mirror)). */
+struct RobustBearingModel
+{
+    double outlierProb = 0.1;    //!< ε
+    double minStd_rad = 0.0349;  //!< σ_min (2°)
+    double stdScale = 1.0;       //!< inflates reported σ (errors are correlated in space)
+    double maxStd_rad = 0.785;   //!< measurements with σ above this are ignored (45°)
+
+    double sigma(double reportedStd) const { return std::max(minStd_rad, stdScale * reportedStd); }
+    /** log p(r) for a wrapped residual r and effective σ. */
+    double logLikelihood(double residual, double sigma) const
+    {
+        const double r = residual / sigma;
+        const double g = std::exp(-0.5 * r * r) / (sigma * 2.5066282746310002);
+        return std::log((1 - outlierProb) * g + outlierProb * 0.15915494309189535);
+    }
+    /** log p of a measurement (and its mirror if ambiguous) given the predicted angle. */
+    double logLikelihood(
+        double predicted, double measured, bool ambiguous, double mirror, double sigma) const
+    {
+        if (!ambiguous) return logLikelihood(wrapToPi(predicted - measured), sigma);
+        const double r1 = wrapToPi(predicted - measured) / sigma;
+        const double r2 = wrapToPi(predicted - mirror) / sigma;
+        const double g = 0.5 * (std::exp(-0.5 * r1 * r1) + std::exp(-0.5 * r2 * r2)) /
+                         (sigma * 2.5066282746310002);
+        return std::log((1 - outlierProb) * g + outlierProb * 0.15915494309189535);
+    }
+};
+
+/** World pose of the receive array: robot pose ⊕ sensor pose (planar). */
+inline mrpt::math::TPose2D sensorWorldPose(
+    const mrpt::math::TPose2D& robot, const mrpt::math::TPose2D& sensorOnRobot)
+{
+    const double c = std::cos(robot.phi), s = std::sin(robot.phi);
+    return {
+        robot.x + c * sensorOnRobot.x - s * sensorOnRobot.y,
+        robot.y + s * sensorOnRobot.x + c * sensorOnRobot.y, robot.phi + sensorOnRobot.phi};
+}
+
+/** Predicted AoA [rad] of a transmitter at (tx, ty) seen from a sensor at world pose `s`. */
+inline double predictAoa(const mrpt::math::TPose2D& s, double tx, double ty)
+{
+    return wrapToPi(std::atan2(ty - s.y, tx - s.x) - s.phi);
+}
+/** Predicted AoD [rad]: direction of the sensor at (sx, sy) in the transmitter's frame. */
+inline double predictAod(const mrpt::math::TPose2D& tx, double sx, double sy)
+{
+    return wrapToPi(std::atan2(sy - tx.y, sx - tx.x) - tx.phi);
+}
+
+/** Which angles of a record a consumer uses. */
+struct BearingUse
+{
+    bool aoa = true;
+    bool aod = true;
+};
+
+/** log-likelihood of one record given the robot pose and the transmitter (AoA and/or AoD). */
+double recordLogLikelihood(
+    const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
+    const RobustBearingModel& model, const BearingUse& use);
+
+}  // namespace mrpt_wifi::localization

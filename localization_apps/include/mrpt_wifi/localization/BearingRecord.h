@@ -1,0 +1,84 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPose2D.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+#include <mrpt_wifi/obs/MacAddress.h>
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi
+{
+class CObservationWiFiBearing;
+}
+
+namespace mrpt_wifi::localization
+{
+/** One bearing measurement of one transmitter, whatever produced it (csi-bearings, another CSI
+ *  tool, a simulator). Angles in radians: AoA in the robot's receive-array frame, AoD in the
+ *  transmitter's array frame (DESIGN.md §6). For linear arrays, `*Ambiguous` says the mirror
+ *  candidate is as likely as the reported angle. */
+struct BearingRecord
+{
+    double t = 0;  //!< UNIX time [s]
+    MacAddress transmitter;
+
+    bool hasAoa = false;
+    double aoa = 0, aoaStd = 0;
+    bool aoaAmbiguous = false;
+    double aoaMirror = 0;
+
+    bool hasAod = false;
+    double aod = 0, aodStd = 0;
+    bool aodAmbiguous = false;
+    double aodMirror = 0;
+
+    /** Pose of the receive array on the robot (x, y, yaw) [m, rad]. */
+    mrpt::math::TPose2D sensorPose{0, 0, 0};
+};
+
+/** Options for reading the bearings CSV. */
+struct BearingCsvOptions
+{
+    double defaultStd_rad = 0.0873;           //!< σ when a row has none (5°)
+    mrpt::math::TPose2D sensorPose{0, 0, 0};  //!< receive array on the robot, for every row
+    /** Resolves names in the `transmitter` column; MACs are always accepted. */
+    const TransmitterMap* names = nullptr;
+};
+
+/** Counted problems of an input, for summaries ("never a silent wrong answer"). */
+struct InputWarnings
+{
+    size_t unknownTransmitter = 0;  //!< bearings of transmitters not in the map
+    size_t outsideTrajectory = 0;   //!< timestamps outside the pose time span
+    size_t noAngle = 0;             //!< rows with neither AoA nor AoD
+    std::string summary() const;
+    size_t total() const { return unknownTransmitter + outsideTrajectory + noAngle; }
+};
+
+/** Reads the bearings CSV ("bearings from elsewhere"). Format: docs in
+ *  share/localization/README.md:
+ *  \code
+ *  # comment lines start with '#'
+ *  timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_mirror_deg,aod_deg,aod_std_deg,aod_mirror_deg
+ *  1700000000.10,02:00:00:00:01:01,23.5,4.0,156.5,-12.0,5.0,
+ *  \endcode
+ *  Required columns: `timestamp` (UNIX s), `transmitter` (MAC or a name of `options.names`) and
+ *  at least one of `aoa_deg` / `aod_deg`; columns may come in any order; an empty cell means "not
+ *  measured"; `*_mirror_deg` non-empty marks the angle ambiguous (linear array). Optional 0/1
+ *  columns `has_aoa`, `has_aod`, `aoa_ambiguous`, `aod_ambiguous` (as `csi-bearings --csv`
+ *  writes them) switch the corresponding cells off when 0.
+ *  Throws std::runtime_error with file:line on malformed rows and unknown transmitter names
+ *  (names can't be guessed); rows without any angle are counted in `warnings`. */
+std::vector<BearingRecord> readBearingCsv(
+    const std::string& path, const BearingCsvOptions& options, InputWarnings* warnings = nullptr);
+
+/** Writes records in the format above (degrees), transmitters as MACs. */
+void writeBearingCsv(const std::string& path, const std::vector<BearingRecord>& records);
+
+/** Converts a bearing observation to a record (and back). */
+BearingRecord recordFromObservation(const CObservationWiFiBearing& obs);
+
+}  // namespace mrpt_wifi::localization

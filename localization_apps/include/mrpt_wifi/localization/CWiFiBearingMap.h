@@ -1,0 +1,101 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/maps/CMetricMap.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+
+#include <memory>
+#include <mutex>
+#include <set>
+
+namespace mrpt_wifi
+{
+/** A metric map of WiFi transmitters of known pose (access points), for MRPT's particle
+ *  filters: it scores `mrpt_wifi::CObservationWiFiBearing` observations (AoA at the robot and
+ *  AoD at the transmitter) with a robust, mirror-aware bearing model
+ *  (localization::RobustBearingModel) and returns 0 (log-likelihood) for anything else, so it
+ *  can sit in a CMultiMetricMap beside other maps.
+ *
+ * Use from any MRPT .ini (pf-localization, wifi-pf-localization):
+ * \code
+ * [MetricMap]
+ * wifiBearingMap_count = 1
+ *
+ * [MetricMap_wifiBearingMap_00_creationOpts]
+ * transmitters_file = /path/to/transmitters.yaml   ; see TransmitterMap (YAML)
+ *
+ * [MetricMap_wifiBearingMap_00_likelihoodOpts]
+ * use_aoa = true
+ * use_aod = true
+ * outlier_prob = 0.1
+ * min_std_deg = 2
+ * std_scale = 1.0
+ * max_std_deg = 45
+ * \endcode
+ * The map is read-only: inserting observations does nothing (it is built from the file).
+ */
+class CWiFiBearingMap : public mrpt::maps::CMetricMap
+{
+    DEFINE_SERIALIZABLE(CWiFiBearingMap, mrpt_wifi)
+
+public:
+    CWiFiBearingMap() = default;
+
+    /** Likelihood options (section `..._likelihoodOpts`). */
+    struct TLikelihoodOptions : public mrpt::config::CLoadableOptions
+    {
+        localization::RobustBearingModel model;
+        localization::BearingUse use;
+        void loadFromConfigFile(
+            const mrpt::config::CConfigFileBase& source, const std::string& section) override;
+        void dumpToTextStream(std::ostream& out) const override;
+    } likelihoodOptions;
+
+    /** Replaces the transmitters. */
+    void setTransmitters(const localization::TransmitterMap& m) { transmitters_ = m; }
+    const localization::TransmitterMap& transmitters() const { return transmitters_; }
+    /** Loads the transmitters from a YAML file (throws with the file and reason). */
+    void loadTransmitters(const std::string& yamlFile);
+
+    /** Observations whose transmitter isn't in the map (counted once per observation object
+     *  and MAC seen, not per particle) and the MACs involved. */
+    size_t unknownTransmitterCount() const;
+    std::set<MacAddress> unknownTransmitters() const;
+
+    // CMetricMap
+    bool isEmpty() const override { return transmitters_.empty(); }
+    void saveMetricMapRepresentationToFile(const std::string& filNamePrefix) const override;
+    std::string asString() const override;
+    void getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const override;
+
+    MAP_DEFINITION_START(CWiFiBearingMap)
+    std::string transmittersFile;  //!< `transmitters_file` in `..._creationOpts`
+    CWiFiBearingMap::TLikelihoodOptions likelihoodOpts;
+    MAP_DEFINITION_END(CWiFiBearingMap)
+
+private:
+    localization::TransmitterMap transmitters_;
+    /** Bookkeeping of unknown transmitters, shared so the map stays copyable (clone()). */
+    struct UnknownLog
+    {
+        std::mutex mtx;
+        std::set<MacAddress> macs;
+        size_t count = 0;
+        const void* lastObs = nullptr;
+    };
+    std::shared_ptr<UnknownLog> unknown_ = std::make_shared<UnknownLog>();
+
+    void internal_clear() override {}
+    bool internal_insertObservation(
+        const mrpt::obs::CObservation& obs,
+        const std::optional<const mrpt::poses::CPose3D>& robotPose) override;
+    double internal_computeObservationLikelihood(
+        const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& takenFrom) const override;
+    bool internal_canComputeObservationLikelihood(
+        const mrpt::obs::CObservation& obs) const override;
+    void noteUnknown(const mrpt::obs::CObservation& obs, const MacAddress& mac) const;
+};
+
+}  // namespace mrpt_wifi

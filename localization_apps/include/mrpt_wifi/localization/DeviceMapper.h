@@ -1,0 +1,73 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi::localization
+{
+/** One bearing ray in the world frame: from the receive array at (x, y), direction θ (and the
+ *  mirror candidate of a linear array). */
+struct BearingRay
+{
+    double t = 0;
+    double x = 0, y = 0;                       //!< receive array position [m]
+    double sensorYaw = 0;                      //!< receive array yaw [rad]
+    double aoa = 0, mirror = 0, sigma = 0.05;  //!< in the sensor frame [rad]
+    bool ambiguous = false;
+};
+
+struct DeviceMapOptions
+{
+    RobustBearingModel model;
+    std::string loss = "cauchy";  //!< robust loss of the refinement
+    double lossScale = 1.0;       //!< in units of σ
+    double gridStep_m = 0.1;      //!< global search grid
+    double margin_m = 2.0;        //!< search area: trajectory bounds grown by this, unless
+    bool boundsGiven = false;     //!< ... bounds are given:
+    double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+    size_t maxGridRays = 400;  //!< rays used by the grid search (evenly subsampled)
+    size_t minRays = 10;       //!< fewer: the device is reported as not localized
+    double inlierSigmas = 3;   //!< |residual| < k·σ counts as inlier
+    /** Bearing errors are correlated along the trajectory (same multipath nearby): the
+     *  covariance is inflated by N_inliers / N_eff, N_eff = distinct cells of this size visited by
+     *  the inlier rays' origins, and by the reduced χ² of the inliers when above 1. */
+    double decorrelation_m = 0.5;
+};
+
+struct DeviceEstimate
+{
+    MacAddress mac;
+    std::string name;  //!< if known
+    bool localized = false;
+    std::string note;  //!< why not, or a caveat
+    double x = 0, y = 0;
+    double cov[3] = {0, 0, 0};  //!< xx, xy, yy [m²] (Ceres covariance, inflated: see options)
+    double covInflation = 1;    //!< factor applied to Ceres' covariance
+    size_t rays = 0, inliers = 0;
+    double medianResidual_deg = 0;
+    double baseline_deg = 0;  //!< angular spread of the rays' directions at the estimate
+};
+
+/** Rays of each transmitter: bearings (AoA) placed on a trajectory (interpolated at their time,
+ *  ⊕ the record's sensor pose). Bearings outside the trajectory's time span are counted in
+ *  `warnings->outsideTrajectory`. */
+std::map<MacAddress, std::vector<BearingRay>> raysFromBearings(
+    const std::vector<BearingRecord>& bearings, const Trajectory2D& trajectory,
+    InputWarnings* warnings = nullptr, double maxGap_s = 1.0);
+
+/** Robust triangulation of one device: global grid search of the mixture likelihood (mirror
+ *  candidates included), then Ceres refinement with a robust loss, then covariance. */
+DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const DeviceMapOptions& o);
+
+/** Writes estimates as CSV (mac,name,x,y,cov_xx,cov_xy,cov_yy,...) and as a TransmitterMap
+ *  YAML (localized devices only, one element, yaw 0). */
+void saveDeviceCsv(const std::string& path, const std::vector<DeviceEstimate>& devices);
+void saveDeviceYaml(const std::string& path, const std::vector<DeviceEstimate>& devices);
+
+}  // namespace mrpt_wifi::localization

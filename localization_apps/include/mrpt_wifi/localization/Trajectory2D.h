@@ -1,0 +1,62 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPose2D.h>
+
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi::localization
+{
+/** A planar trajectory: poses at increasing UNIX times. */
+struct Trajectory2D
+{
+    std::vector<double> t;
+    std::vector<mrpt::math::TPose2D> poses;
+
+    size_t size() const { return t.size(); }
+    bool empty() const { return t.empty(); }
+    void push_back(double time, const mrpt::math::TPose2D& p)
+    {
+        t.push_back(time), poses.push_back(p);
+    }
+
+    /** Reads a TUM file (`t x y z qx qy qz qw`, '#' comments); yaw from the quaternion, z
+     *  ignored. Throws std::runtime_error with file:line; sorts by time, rejects duplicates. */
+    static Trajectory2D fromTumFile(const std::string& path);
+    /** Writes TUM (z = 0, rotation about z). */
+    void saveTum(const std::string& path, const std::string& comment = {}) const;
+
+    /** Pose at time `time` by linear interpolation (yaw on the circle). False if `time` is
+     *  outside [t.front(), t.back()] or the neighbours are more than `maxGap_s` apart. */
+    bool interpolate(double time, mrpt::math::TPose2D& out, double maxGap_s = 1.0) const;
+};
+
+/** Summary statistics of errors. */
+struct ErrorStats
+{
+    size_t count = 0;
+    double rmse = 0, mean = 0, median = 0, p90 = 0, max = 0;
+    std::string asString(const char* unit = "m") const;
+};
+ErrorStats computeStats(std::vector<double> errors);
+
+/** Absolute trajectory error as evo computes it (`evo_ape --align`): estimate poses associated
+ *  with ground truth by time (truth interpolated at the estimate's stamps), the rigid SE(2)
+ *  transform that best maps estimate positions onto truth (Umeyama/Horn, no scale), then
+ *  position errors. `align = false` compares in the given frames. */
+struct AteResult
+{
+    ErrorStats stats;
+    std::vector<double> times, errors;  //!< per associated pose
+    mrpt::math::TPose2D alignment;      //!< applied to the estimate
+    size_t unmatched = 0;               //!< estimate poses without truth at their time
+};
+AteResult absoluteTrajectoryError(
+    const Trajectory2D& estimate, const Trajectory2D& truth, bool align = true);
+
+/** Rigid 2-D transform T minimising Σ |T(a_i) − b_i|² (closed form). */
+mrpt::math::TPose2D alignRigid2D(
+    const std::vector<mrpt::math::TPoint2D>& a, const std::vector<mrpt::math::TPoint2D>& b);
+
+}  // namespace mrpt_wifi::localization

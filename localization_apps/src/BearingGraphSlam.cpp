@@ -1,0 +1,416 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/poses/CPosePDFGaussianInf.h>
+#include <mrpt/system/CTicTac.h>
+#include <mrpt_wifi/localization/BearingGraphSlam.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+
+#include "BearingResiduals.h"
+
+namespace mrpt_wifi::localization
+{
+using mrpt::math::TPose2D;
+
+namespace
+{
+TPose2D compose(const TPose2D& a, const TPose2D& b)
+{
+    const double c = std::cos(a.phi), s = std::sin(a.phi);
+    return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, wrapToPi(a.phi + b.phi)};
+}
+TPose2D inverseCompose(const TPose2D& a, const TPose2D& b)  // a⁻¹ ⊕ b
+{
+    const double c = std::cos(a.phi), s = std::sin(a.phi);
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    return {c * dx + s * dy, -s * dx + c * dy, wrapToPi(b.phi - a.phi)};
+}
+
+struct UnionFind
+{
+    std::vector<size_t> p;
+    explicit UnionFind(size_t n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+    size_t find(size_t x) { return p[x] == x ? x : p[x] = find(p[x]); }
+    void unite(size_t a, size_t b) { p[find(a)] = find(b); }
+};
+}  // namespace
+
+TPose2D placeTrajectory(
+    const Trajectory2D& odo, const std::vector<BearingRecord>& bearings, const TransmitterMap& aps,
+    double window_s)
+{
+    if (odo.empty()) throw std::runtime_error("placeTrajectory: empty odometry");
+    std::vector<std::pair<const BearingRecord*, TPose2D>> sample;
+    std::vector<const BearingRecord*> cand;
+    for (const auto& b : bearings)
+        if (b.t <= odo.t.front() + window_s && aps.find(b.transmitter)) cand.push_back(&b);
+    const size_t stride = std::max<size_t>(1, cand.size() / 300);
+    for (size_t i = 0; i < cand.size(); i += stride)
+    {
+        TPose2D p;
+        if (odo.interpolate(cand[i]->t, p)) sample.emplace_back(cand[i], p);
+    }
+    if (sample.size() < 5)
+        throw std::runtime_error(
+            "cannot place the trajectory among the known APs: fewer than 5 bearings of known APs "
+            "in the first " +
+            std::to_string(int(window_s)) + " s of odometry");
+    RobustBearingModel model;
+    model.minStd_rad = 0.087;  // coarse grid: be tolerant
+    const BearingUse use;
+    auto score = [&](const TPose2D& T)
+    {
+        double ll = 0;
+        for (const auto& [b, p] : sample)
+            ll += recordLogLikelihood(*b, compose(T, p), *aps.find(b->transmitter), model, use);
+        return ll;
+    };
+    double xmin, xmax, ymin, ymax;
+    aps.bounds(0, xmin, xmax, ymin, ymax);
+    // The trajectory starts somewhere among the APs: place its first pose there.
+    const TPose2D p0 = odo.poses.front();
+    auto transformFor = [&](double x, double y, double yaw)
+    {
+        // T such that T ⊕ p0 = (x, y, yaw)
+        const double th = wrapToPi(yaw - p0.phi);
+        const double c = std::cos(th), s = std::sin(th);
+        return TPose2D(x - (c * p0.x - s * p0.y), y - (s * p0.x + c * p0.y), th);
+    };
+    double best = -1e300;
+    TPose2D bestT;
+    double bx = 0, by = 0, byaw = 0;
+    for (double x = xmin; x <= xmax + 1e-9; x += 0.5)
+        for (double y = ymin; y <= ymax + 1e-9; y += 0.5)
+            for (int k = 0; k < 72; ++k)
+            {
+                const double yaw = -M_PI + k * (M_PI / 36);
+                const TPose2D T = transformFor(x, y, yaw);
+                const double s = score(T);
+                if (s > best) best = s, bestT = T, bx = x, by = y, byaw = yaw;
+            }
+    const double cx = bx, cy = by, cyaw = byaw;
+    for (double x = cx - 0.5; x <= cx + 0.5 + 1e-9; x += 0.1)
+        for (double y = cy - 0.5; y <= cy + 0.5 + 1e-9; y += 0.1)
+            for (int k = -5; k <= 5; ++k)
+            {
+                const TPose2D T = transformFor(x, y, cyaw + k * M_PI / 180);
+                const double s = score(T);
+                if (s > best) best = s, bestT = T;
+            }
+    return bestT;
+}
+
+GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt)
+{
+    mrpt::system::CTicTac total;
+    GraphSlamResult res;
+    const Trajectory2D& odo = in.odometry;
+    if (odo.size() < 2) throw std::runtime_error("graph SLAM: the odometry has < 2 poses");
+
+    // ---- Pose nodes.
+    Trajectory2D nodes;            // node times and initial poses (odometry frame)
+    std::vector<size_t> graphIds;  // .graph node IDs in order
+    if (in.graph)
+    {
+        if (in.graph->nodes.empty()) throw std::runtime_error("graph SLAM: empty .graph");
+        if (in.graph->nodes.size() != odo.size())
+            throw std::runtime_error(
+                "graph SLAM: the .graph has " + std::to_string(in.graph->nodes.size()) +
+                " nodes but the node-times file " + std::to_string(odo.size()) + " rows");
+        size_t k = 0;
+        for (const auto& [id, p] : in.graph->nodes)
+        {
+            graphIds.push_back(id);
+            nodes.push_back(odo.t[k++], p.asTPose());
+        }
+    }
+    else
+    {
+        for (size_t i = 0; i < odo.size(); ++i)
+            if (nodes.empty() || odo.t[i] - nodes.t.back() >= opt.nodePeriod_s - 1e-9 ||
+                i + 1 == odo.size())
+                nodes.push_back(odo.t[i], odo.poses[i]);
+    }
+    const size_t N = nodes.size();
+    // Odometry interpolation source: fine odometry, or the graph's own node poses.
+    const Trajectory2D& interp = in.graph ? nodes : odo;
+
+    // ---- APs.
+    std::map<MacAddress, size_t> apIndex;
+    std::vector<KnownTransmitter> apList;
+    if (opt.apsKnown)
+    {
+        if (in.aps.empty()) throw std::runtime_error("graph SLAM: known APs requested, none given");
+        for (const auto& t : in.aps.transmitters())
+            apIndex[t.mac] = apList.size(), apList.push_back(t);
+    }
+
+    // ---- Attach bearings to nodes.
+    struct Attached
+    {
+        const BearingRecord* b;
+        size_t node;
+        TPose2D offset;  // node ⊕ offset = receive array pose
+    };
+    std::vector<Attached> att;
+    std::map<MacAddress, size_t> unknownSeen;
+    for (const auto& b : in.bearings)
+    {
+        if (opt.apsKnown && !apIndex.count(b.transmitter))
+        {
+            res.warnings.unknownTransmitter++;
+            continue;
+        }
+        TPose2D pb;
+        if (b.t < nodes.t.front() || b.t > nodes.t.back() || !interp.interpolate(b.t, pb))
+        {
+            res.warnings.outsideTrajectory++;
+            continue;
+        }
+        auto it = std::upper_bound(nodes.t.begin(), nodes.t.end(), b.t);
+        const size_t k = size_t(it - nodes.t.begin()) - 1;
+        TPose2D pk;
+        interp.interpolate(nodes.t[k], pk);
+        att.push_back({&b, k, compose(inverseCompose(pk, pb), b.sensorPose)});
+        if (!opt.apsKnown) unknownSeen[b.transmitter]++;
+    }
+    if (att.empty())
+        throw std::runtime_error(
+            "graph SLAM: no usable bearings (" + res.warnings.summary() +
+            "); do the bearings' timestamps overlap the odometry?");
+
+    // ---- Initial values.
+    std::vector<std::array<double, 3>> X(N);
+    TPose2D place(0, 0, 0);
+    if (opt.apsKnown) place = placeTrajectory(nodes, in.bearings, in.aps);
+    for (size_t k = 0; k < N; ++k)
+    {
+        const auto p = compose(place, nodes.poses[k]);
+        X[k] = {p.x, p.y, p.phi};
+        res.initialPoses.push_back(nodes.t[k], p);
+    }
+    if (!opt.apsKnown)
+    {
+        // Unknown APs: triangulate each from its AoA rays on the odometry trajectory, then its
+        // yaw from AoD by voting over both mirror candidates.
+        std::map<MacAddress, std::vector<BearingRay>> rays;
+        for (const auto& a : att)
+        {
+            if (!a.b->hasAoa) continue;
+            const auto s = compose(res.initialPoses.poses[a.node], a.offset);
+            BearingRay r;
+            r.x = s.x, r.y = s.y, r.sensorYaw = s.phi, r.aoa = a.b->aoa;
+            r.mirror = a.b->aoaMirror, r.ambiguous = a.b->aoaAmbiguous, r.sigma = a.b->aoaStd;
+            rays[a.b->transmitter].push_back(r);
+        }
+        DeviceMapOptions dmo;
+        dmo.model.minStd_rad = std::max(opt.minStd_rad, 0.087);  // drifted rays: be tolerant
+        dmo.gridStep_m = 0.25;
+        for (const auto& [mac, count] : unknownSeen)
+        {
+            (void)count;
+            KnownTransmitter t;
+            t.mac = mac;
+            const KnownTransmitter* k = in.aps.find(mac);
+            t.name = k ? k->name : mac.asString();
+            t.array = k ? k->array : ArrayGeometry::fromElements({});
+            const auto r = rays.find(mac);
+            if (r == rays.end())
+            {
+                res.warnings.noAngle++;
+                continue;  // AoD only: can't place it
+            }
+            const auto d = triangulateDevice(r->second, dmo);
+            if (!d.localized) continue;
+            t.pose = TPose2D(d.x, d.y, 0);
+            // Yaw: histogram of (direction to robot − AoD) over both candidates.
+            std::vector<double> hist(360, 0);
+            for (const auto& a : att)
+            {
+                if (a.b->transmitter != mac || !a.b->hasAod) continue;
+                const auto s = compose(res.initialPoses.poses[a.node], a.offset);
+                const double dir = std::atan2(s.y - d.y, s.x - d.x);
+                for (int c = 0; c < (a.b->aodAmbiguous ? 2 : 1); ++c)
+                {
+                    const double yaw = wrapToPi(dir - (c ? a.b->aodMirror : a.b->aod));
+                    hist[size_t(std::floor((yaw + M_PI) / (2 * M_PI) * 360)) % 360] += 1;
+                }
+            }
+            double bestH = -1;
+            for (size_t i = 0; i < 360; ++i)
+            {
+                const double h = hist[i] + 0.5 * (hist[(i + 1) % 360] + hist[(i + 359) % 360]);
+                if (h > bestH) bestH = h, t.pose.phi = wrapToPi(-M_PI + (i + 0.5) * M_PI / 180);
+            }
+            apIndex[mac] = apList.size();
+            apList.push_back(t);
+        }
+        if (apList.empty())
+            throw std::runtime_error("graph SLAM: no AP could be initialised from the bearings");
+    }
+    std::vector<std::array<double, 3>> A(apList.size());
+    for (size_t j = 0; j < apList.size(); ++j)
+        A[j] = {apList[j].pose.x, apList[j].pose.y, apList[j].pose.phi};
+
+    // ---- The problem.
+    ceres::Problem::Options po;
+    po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    for (auto& x : X) problem.AddParameterBlock(x.data(), 3);
+    for (auto& a : A) problem.AddParameterBlock(a.data(), 3);
+
+    UnionFind uf(N);
+    auto addOdo = [&](size_t i, size_t j, const TPose2D& z, const Eigen::Matrix3d& info)
+    {
+        Eigen::LLT<Eigen::Matrix3d> llt(info);
+        if (llt.info() != Eigen::Success)
+            throw std::runtime_error("graph SLAM: an odometry edge's information isn't positive");
+        const Eigen::Matrix3d U = llt.matrixU();
+        auto* r = new detail::OdometryResidual{z.x, z.y, z.phi, {}};
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) r->sqrtInfo[3 * a + b] = U(a, b);
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<detail::OdometryResidual, 3, 3, 3>(r), nullptr,
+            X[i].data(), X[j].data());
+        uf.unite(i, j);
+        res.odometryEdges++;
+    };
+    if (in.graph)
+    {
+        std::map<size_t, size_t> idx;
+        for (size_t k = 0; k < graphIds.size(); ++k) idx[graphIds[k]] = k;
+        for (const auto& [ids, e] : in.graph->edges)
+        {
+            const auto a = idx.find(ids.first), b = idx.find(ids.second);
+            if (a == idx.end() || b == idx.end())
+                throw std::runtime_error("graph SLAM: an edge of the .graph names a missing node");
+            Eigen::Matrix3d info;
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 3; ++c) info(r, c) = e.cov_inv(r, c);
+            addOdo(a->second, b->second, e.mean.asTPose(), info);
+        }
+    }
+    else
+    {
+        for (size_t k = 0; k + 1 < N; ++k)
+        {
+            const TPose2D z = inverseCompose(nodes.poses[k], nodes.poses[k + 1]);
+            const double d = std::hypot(z.x, z.y);
+            const double sxy = std::max(opt.odoSigmaXY_min, opt.odoSigmaXY_perSqrtM * std::sqrt(d));
+            const double sth = std::max(
+                opt.odoSigmaYaw_min, opt.odoSigmaYaw_perSqrtM * std::sqrt(d) +
+                                         opt.odoSigmaYaw_perSqrtRad * std::sqrt(std::abs(z.phi)));
+            Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+            info(0, 0) = info(1, 1) = 1 / (sxy * sxy);
+            info(2, 2) = 1 / (sth * sth);
+            addOdo(k, k + 1, z, info);
+        }
+    }
+    for (size_t k = 1; k < N; ++k)
+        if (uf.find(k) != uf.find(0))
+            throw std::runtime_error(
+                "graph SLAM: the pose graph is not connected (node " + std::to_string(k) +
+                " has no odometry path to node 0)");
+
+    auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
+    std::vector<bool> apUsed(A.size(), false);
+    for (const auto& a : att)
+    {
+        const auto it = apIndex.find(a.b->transmitter);
+        if (it == apIndex.end()) continue;  // an unknown AP that couldn't be initialised
+        double* ap = A[it->second].data();
+        if (opt.useAoa && a.b->hasAoa)
+        {
+            problem.AddResidualBlock(
+                new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
+                    new detail::AoaResidual{
+                        a.offset.x, a.offset.y, a.offset.phi, a.b->aoa, a.b->aoaMirror,
+                        sigma(a.b->aoaStd), a.b->aoaAmbiguous}),
+                detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
+            res.aoaEdges++;
+            apUsed[it->second] = true;
+        }
+        if (opt.useAod && a.b->hasAod)
+        {
+            problem.AddResidualBlock(
+                new ceres::AutoDiffCostFunction<detail::AodResidual, 1, 3, 3>(
+                    new detail::AodResidual{
+                        a.offset.x, a.offset.y, a.b->aod, a.b->aodMirror, sigma(a.b->aodStd),
+                        a.b->aodAmbiguous}),
+                detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
+            res.aodEdges++;
+            apUsed[it->second] = true;
+        }
+    }
+    if (res.aoaEdges + res.aodEdges == 0)
+        throw std::runtime_error("graph SLAM: no bearing edge (AoA and AoD both disabled?)");
+    for (size_t j = 0; j < A.size(); ++j)
+    {
+        if (!apUsed[j]) res.apsWithoutBearings++;
+        if (opt.apsKnown || !apUsed[j]) problem.SetParameterBlockConstant(A[j].data());
+    }
+    if (!opt.apsKnown) problem.SetParameterBlockConstant(X[0].data());  // gauge
+
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so.max_num_iterations = opt.maxIterations;
+    so.num_threads = opt.threads;
+    so.minimizer_progress_to_stdout = opt.verbose;
+    ceres::Solver::Summary sum;
+    mrpt::system::CTicTac tic;
+    ceres::Solve(so, &problem, &sum);
+    res.solveTime_s = tic.Tac();
+    res.initialCost = sum.initial_cost, res.finalCost = sum.final_cost;
+    res.iterations = int(sum.iterations.size());
+    res.solverReport = sum.BriefReport();
+    if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
+
+    // ---- Results, also as an MRPT graph (poses, then AP vertices; odometry edges).
+    for (size_t k = 0; k < N; ++k)
+    {
+        const TPose2D p(X[k][0], X[k][1], wrapToPi(X[k][2]));
+        res.poses.push_back(nodes.t[k], p);
+        res.graph.nodes[k] = mrpt::poses::CPose2D(p);
+    }
+    for (size_t j = 0; j < A.size(); ++j)
+    {
+        auto t = apList[j];
+        t.pose = TPose2D(A[j][0], A[j][1], wrapToPi(A[j][2]));
+        res.aps.add(t);
+        res.graph.nodes[N + j] = mrpt::poses::CPose2D(t.pose);
+    }
+    if (in.graph)
+    {
+        std::map<size_t, size_t> idx;
+        for (size_t k = 0; k < graphIds.size(); ++k) idx[graphIds[k]] = k;
+        for (const auto& [ids, e] : in.graph->edges)
+            res.graph.insertEdge(idx[ids.first], idx[ids.second], e);
+    }
+    for (size_t k = 0; !in.graph && k + 1 < N; ++k)
+    {
+        // Odometry edges as MRPT stores them: relative pose and information.
+        const TPose2D z = inverseCompose(nodes.poses[k], nodes.poses[k + 1]);
+        mrpt::poses::CPosePDFGaussianInf e;
+        e.mean = mrpt::poses::CPose2D(z);
+        const double d = std::hypot(z.x, z.y);
+        const double sxy = std::max(opt.odoSigmaXY_min, opt.odoSigmaXY_perSqrtM * std::sqrt(d));
+        const double sth = std::max(opt.odoSigmaYaw_min, opt.odoSigmaYaw_perSqrtM * std::sqrt(d));
+        e.cov_inv.setZero();
+        e.cov_inv(0, 0) = e.cov_inv(1, 1) = 1 / (sxy * sxy);
+        e.cov_inv(2, 2) = 1 / (sth * sth);
+        res.graph.insertEdge(k, k + 1, e);
+    }
+    res.graph.root = 0;
+    res.totalTime_s = total.Tac();
+    return res;
+}
+
+}  // namespace mrpt_wifi::localization

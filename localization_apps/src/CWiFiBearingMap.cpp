@@ -1,0 +1,216 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/core/bits_math.h>
+#include <mrpt/maps/TMetricMapTypesRegistry.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CText.h>
+#include <mrpt/opengl/stock_objects.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+
+// Both names work in a [MetricMap] section: `wifiBearingMap_count=1` is the short one.
+MAP_DEFINITION_REGISTER("mrpt_wifi::CWiFiBearingMap,wifiBearingMap", mrpt_wifi::CWiFiBearingMap)
+
+IMPLEMENTS_SERIALIZABLE(CWiFiBearingMap, mrpt::maps::CMetricMap, mrpt_wifi)
+
+// ---------------------------------------------------------------- map definition (.ini)
+CWiFiBearingMap::TMapDefinition::TMapDefinition() = default;
+
+void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
+    const mrpt::config::CConfigFileBase& source, const std::string& prefix)
+{
+    transmittersFile = source.read_string(prefix + "_creationOpts", "transmitters_file", "");
+    likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+}
+
+void CWiFiBearingMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const
+{
+    out << "transmitters_file = " << transmittersFile << "\n";
+    likelihoodOpts.dumpToTextStream(out);
+}
+
+mrpt::maps::CMetricMap* CWiFiBearingMap::internal_CreateFromMapDefinition(
+    const mrpt::maps::TMetricMapInitializer& _def)
+{
+    const auto& def = dynamic_cast<const CWiFiBearingMap::TMapDefinition&>(_def);
+    auto* map = new CWiFiBearingMap();
+    map->likelihoodOptions = def.likelihoodOpts;
+    if (def.transmittersFile.empty())
+    {
+        delete map;
+        throw std::runtime_error(
+            "CWiFiBearingMap: 'transmitters_file' is missing in the map's _creationOpts section");
+    }
+    try
+    {
+        map->loadTransmitters(def.transmittersFile);
+    }
+    catch (...)
+    {
+        delete map;
+        throw;
+    }
+    return map;
+}
+
+void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
+    const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+    use.aoa = c.read_bool(s, "use_aoa", use.aoa);
+    use.aod = c.read_bool(s, "use_aod", use.aod);
+    model.outlierProb = c.read_double(s, "outlier_prob", model.outlierProb);
+    model.minStd_rad =
+        mrpt::DEG2RAD(c.read_double(s, "min_std_deg", mrpt::RAD2DEG(model.minStd_rad)));
+    model.maxStd_rad =
+        mrpt::DEG2RAD(c.read_double(s, "max_std_deg", mrpt::RAD2DEG(model.maxStd_rad)));
+    model.stdScale = c.read_double(s, "std_scale", model.stdScale);
+    if (!(model.outlierProb > 0 && model.outlierProb < 1))
+        throw std::invalid_argument("[" + s + "] outlier_prob must be in (0, 1)");
+    if (!(model.minStd_rad > 0) || !(model.stdScale > 0))
+        throw std::invalid_argument("[" + s + "] min_std_deg and std_scale must be > 0");
+}
+
+void CWiFiBearingMap::TLikelihoodOptions::dumpToTextStream(std::ostream& out) const
+{
+    out << "use_aoa = " << use.aoa << "\nuse_aod = " << use.aod
+        << "\noutlier_prob = " << model.outlierProb
+        << "\nmin_std_deg = " << mrpt::RAD2DEG(model.minStd_rad)
+        << "\nmax_std_deg = " << mrpt::RAD2DEG(model.maxStd_rad)
+        << "\nstd_scale = " << model.stdScale << "\n";
+}
+
+// ---------------------------------------------------------------- the map
+void CWiFiBearingMap::loadTransmitters(const std::string& yamlFile)
+{
+    transmitters_ = TransmitterMap::fromYamlFile(yamlFile);
+    if (transmitters_.empty())
+        throw std::runtime_error(yamlFile + ": the transmitter map is empty");
+}
+
+size_t CWiFiBearingMap::unknownTransmitterCount() const
+{
+    std::lock_guard<std::mutex> lk(unknown_->mtx);
+    return unknown_->count;
+}
+
+std::set<MacAddress> CWiFiBearingMap::unknownTransmitters() const
+{
+    std::lock_guard<std::mutex> lk(unknown_->mtx);
+    return unknown_->macs;
+}
+
+void CWiFiBearingMap::noteUnknown(const mrpt::obs::CObservation& obs, const MacAddress& mac) const
+{
+    // Called once per particle: count each observation object once, warn once per MAC.
+    std::lock_guard<std::mutex> lk(unknown_->mtx);
+    if (unknown_->lastObs == &obs) return;
+    unknown_->lastObs = &obs;
+    unknown_->count++;
+    if (unknown_->macs.insert(mac).second)
+        std::cerr << "[CWiFiBearingMap] warning: bearings of transmitter " << mac.asString()
+                  << " which is not in the map: ignored (counted)\n";
+}
+
+bool CWiFiBearingMap::internal_insertObservation(
+    const mrpt::obs::CObservation&, const std::optional<const mrpt::poses::CPose3D>&)
+{
+    return false;  // built from the transmitters file, not from observations
+}
+
+bool CWiFiBearingMap::internal_canComputeObservationLikelihood(
+    const mrpt::obs::CObservation& obs) const
+{
+    return IS_CLASS(obs, CObservationWiFiBearing);
+}
+
+double CWiFiBearingMap::internal_computeObservationLikelihood(
+    const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& takenFrom) const
+{
+    if (!IS_CLASS(obs, CObservationWiFiBearing)) return 0;
+    const auto& o = static_cast<const CObservationWiFiBearing&>(obs);
+    const KnownTransmitter* tx = transmitters_.find(o.transmitter);
+    if (!tx)
+    {
+        noteUnknown(obs, o.transmitter);
+        return 0;
+    }
+    BearingRecord r;
+    r.transmitter = o.transmitter;
+    r.sensorPose = mrpt::math::TPose2D(o.sensorPose.x(), o.sensorPose.y(), o.sensorPose.yaw());
+    r.hasAoa = true;
+    r.aoa = o.aoa_rad, r.aoaStd = o.aoaStd_rad;
+    r.aoaAmbiguous = o.aoaAmbiguous, r.aoaMirror = o.aoaMirror_rad;
+    r.hasAod = o.hasAod;
+    r.aod = o.aod_rad, r.aodStd = o.aodStd_rad;
+    r.aodAmbiguous = o.aodAmbiguous, r.aodMirror = o.aodMirror_rad;
+    const mrpt::math::TPose2D robot(takenFrom.x(), takenFrom.y(), takenFrom.yaw());
+    return recordLogLikelihood(r, robot, *tx, likelihoodOptions.model, likelihoodOptions.use);
+}
+
+void CWiFiBearingMap::saveMetricMapRepresentationToFile(const std::string& prefix) const
+{
+    std::ofstream f(prefix + "_transmitters.yaml");
+    f << transmitters_.asYamlText();
+}
+
+std::string CWiFiBearingMap::asString() const
+{
+    return "CWiFiBearingMap with " + std::to_string(transmitters_.size()) + " transmitters";
+}
+
+void CWiFiBearingMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
+{
+    if (!genericMapParams.enableSaveAs3DObject) return;
+    for (const auto& t : transmitters_.transmitters())
+    {
+        auto corner = mrpt::opengl::stock_objects::CornerXYSimple(0.5f, 2.0f);
+        corner->setPose(mrpt::poses::CPose3D(t.pose.x, t.pose.y, 0, t.pose.phi, 0, 0));
+        o.insert(corner);
+        auto label = mrpt::opengl::CText::Create(t.name);
+        label->setLocation(t.pose.x, t.pose.y, 0.3);
+        o.insert(label);
+    }
+}
+
+// ---------------------------------------------------------------- serialization
+uint8_t CWiFiBearingMap::serializeGetVersion() const
+{
+    return 0;
+}
+
+void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
+{
+    out << transmitters_.asYamlText();
+    const auto& m = likelihoodOptions.model;
+    out << m.outlierProb << m.minStd_rad << m.stdScale << m.maxStd_rad << likelihoodOptions.use.aoa
+        << likelihoodOptions.use.aod;
+    out << genericMapParams;
+}
+
+void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
+{
+    switch (version)
+    {
+        case 0:
+        {
+            std::string yaml;
+            in >> yaml;
+            transmitters_ = TransmitterMap::fromYamlText(yaml, "<serialized CWiFiBearingMap>");
+            auto& m = likelihoodOptions.model;
+            in >> m.outlierProb >> m.minStd_rad >> m.stdScale >> m.maxStd_rad >>
+                likelihoodOptions.use.aoa >> likelihoodOptions.use.aod;
+            in >> genericMapParams;
+        }
+        break;
+        default:
+            MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+    }
+}

@@ -1,0 +1,174 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+namespace mrpt_wifi::localization
+{
+using mrpt::math::TPoint2D;
+using mrpt::math::TPose2D;
+
+Trajectory2D Trajectory2D::fromTumFile(const std::string& path)
+{
+    std::ifstream f(path);
+    if (!f) throw std::runtime_error(path + ": cannot open TUM trajectory");
+    std::vector<std::pair<double, TPose2D>> rows;
+    std::string line;
+    int lineNo = 0;
+    while (std::getline(f, line))
+    {
+        ++lineNo;
+        const auto b = line.find_first_not_of(" \t\r");
+        if (b == std::string::npos || line[b] == '#') continue;
+        std::istringstream is(line);
+        double v[8];
+        for (double& x : v)
+            if (!(is >> x))
+                throw std::runtime_error(
+                    path + ":" + std::to_string(lineNo) + ": expected 't x y z qx qy qz qw'");
+        // Yaw of a quaternion (rotation about z dominates for a planar robot).
+        const double qx = v[4], qy = v[5], qz = v[6], qw = v[7];
+        const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
+        rows.emplace_back(v[0], TPose2D(v[1], v[2], yaw));
+    }
+    std::stable_sort(
+        rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    Trajectory2D out;
+    for (size_t i = 0; i < rows.size(); ++i)
+    {
+        if (i && rows[i].first == rows[i - 1].first)
+            throw std::runtime_error(
+                path + ": duplicate timestamp " + std::to_string(rows[i].first));
+        out.push_back(rows[i].first, rows[i].second);
+    }
+    return out;
+}
+
+void Trajectory2D::saveTum(const std::string& path, const std::string& comment) const
+{
+    std::ofstream f(path);
+    if (!f) throw std::runtime_error(path + ": cannot write");
+    f << "# " << (comment.empty() ? "trajectory" : comment) << ", TUM: t x y z qx qy qz qw\n";
+    char buf[256];
+    for (size_t i = 0; i < size(); ++i)
+    {
+        const auto& p = poses[i];
+        std::snprintf(
+            buf, sizeof(buf), "%.6f %.6f %.6f 0 0 0 %.9f %.9f\n", t[i], p.x, p.y,
+            std::sin(p.phi / 2), std::cos(p.phi / 2));
+        f << buf;
+    }
+}
+
+bool Trajectory2D::interpolate(double time, TPose2D& out, double maxGap) const
+{
+    if (t.empty() || time < t.front() || time > t.back()) return false;
+    const auto it = std::lower_bound(t.begin(), t.end(), time);
+    const size_t i1 = size_t(it - t.begin());
+    if (t[i1] == time)
+    {
+        out = poses[i1];
+        return true;
+    }
+    const size_t i0 = i1 - 1;
+    const double dt = t[i1] - t[i0];
+    if (dt > maxGap) return false;
+    const double a = (time - t[i0]) / dt;
+    const auto &p0 = poses[i0], &p1 = poses[i1];
+    out.x = p0.x + a * (p1.x - p0.x);
+    out.y = p0.y + a * (p1.y - p0.y);
+    out.phi = wrapToPi(p0.phi + a * wrapToPi(p1.phi - p0.phi));
+    return true;
+}
+
+std::string ErrorStats::asString(const char* unit) const
+{
+    char buf[256];
+    std::snprintf(
+        buf, sizeof(buf), "n=%zu  rmse=%.3f %s  mean=%.3f  median=%.3f  p90=%.3f  max=%.3f", count,
+        rmse, unit, mean, median, p90, max);
+    return buf;
+}
+
+ErrorStats computeStats(std::vector<double> e)
+{
+    ErrorStats s;
+    s.count = e.size();
+    if (e.empty()) return s;
+    std::sort(e.begin(), e.end());
+    double sq = 0, sum = 0;
+    for (double v : e) sq += v * v, sum += v;
+    s.rmse = std::sqrt(sq / e.size());
+    s.mean = sum / e.size();
+    auto quantile = [&](double q)
+    {
+        const double pos = q * (e.size() - 1);
+        const size_t i = size_t(pos);
+        return i + 1 < e.size() ? e[i] + (pos - i) * (e[i + 1] - e[i]) : e[i];
+    };
+    s.median = quantile(0.5);
+    s.p90 = quantile(0.9);
+    s.max = e.back();
+    return s;
+}
+
+TPose2D alignRigid2D(const std::vector<TPoint2D>& a, const std::vector<TPoint2D>& b)
+{
+    if (a.size() != b.size() || a.empty()) throw std::invalid_argument("alignRigid2D: bad input");
+    TPoint2D ca(0, 0), cb(0, 0);
+    for (size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
+    ca *= 1.0 / a.size();
+    cb *= 1.0 / b.size();
+    // Optimal rotation in 2-D: angle of Σ (a'_i, b'_i) cross/dot sums.
+    double sdot = 0, scross = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+    {
+        const TPoint2D pa = a[i] - ca, pb = b[i] - cb;
+        sdot += pa.x * pb.x + pa.y * pb.y;
+        scross += pa.x * pb.y - pa.y * pb.x;
+    }
+    const double th = std::atan2(scross, sdot);
+    const double c = std::cos(th), s = std::sin(th);
+    return TPose2D(cb.x - (c * ca.x - s * ca.y), cb.y - (s * ca.x + c * ca.y), th);
+}
+
+AteResult absoluteTrajectoryError(const Trajectory2D& est, const Trajectory2D& truth, bool align)
+{
+    AteResult r;
+    std::vector<TPoint2D> a, b;
+    for (size_t i = 0; i < est.size(); ++i)
+    {
+        TPose2D gt;
+        if (!truth.interpolate(est.t[i], gt, 0.5))
+        {
+            r.unmatched++;
+            continue;
+        }
+        a.emplace_back(est.poses[i].x, est.poses[i].y);
+        b.emplace_back(gt.x, gt.y);
+        r.times.push_back(est.t[i]);
+    }
+    if (a.size() < 2)
+        throw std::runtime_error(
+            "ATE: the estimate and the ground truth don't overlap in time (" +
+            std::to_string(a.size()) + " poses matched)");
+    r.alignment = align ? alignRigid2D(a, b) : TPose2D(0, 0, 0);
+    const mrpt::poses::CPose2D T(r.alignment);
+    for (size_t i = 0; i < a.size(); ++i)
+    {
+        const auto p = T.composePoint(a[i]);
+        r.errors.push_back(std::hypot(p.x - b[i].x, p.y - b[i].y));
+    }
+    r.stats = computeStats(r.errors);
+    return r;
+}
+
+}  // namespace mrpt_wifi::localization

@@ -1,0 +1,250 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <gtest/gtest.h>
+#include <mrpt/bayes/CParticleFilter.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt/slam/CMonteCarloLocalization2D.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/RawlogIO.h>
+
+#include <fstream>
+
+#include "SyntheticWorld.h"
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+using namespace mrpt_wifi::loctest;
+
+namespace
+{
+const char* kApsYaml = R"(transmitters:
+  - name: nw
+    mac: '02:00:00:00:0a:01'
+    position: [0.3, 4.7]
+    yaw_deg: -45
+    array_elements: [[0, -0.039], [0, 0.039]]
+  - name: se
+    mac: '02:00:00:00:0a:02'
+    position: [9.7, 0.3]
+    yaw_deg: 135
+    array_elements: [[0, -0.039], [0, 0.039]]
+  - name: ne
+    mac: '02:00:00:00:0a:03'
+    position: [9.7, 4.7]
+    yaw_deg: -135
+    array_elements: [[0, -0.039], [0, 0.039]]
+)";
+
+std::string writeTemp(const std::string& name, const std::string& text)
+{
+    const std::string path = mrpt::system::getTempFileName() + "_" + name;
+    std::ofstream(path) << text;
+    return path;
+}
+
+std::string iniFor(const std::string& apsFile, const std::string& mapName = "wifiBearingMap")
+{
+    return "[MetricMap]\n" + mapName + "_count=1\n[MetricMap_" + mapName +
+           "_00_creationOpts]\ntransmitters_file=" + apsFile + "\n[MetricMap_" + mapName +
+           "_00_likelihoodOpts]\nmin_std_deg=3\n";
+}
+
+mrpt::maps::CMultiMetricMap mapFromIni(const std::string& ini)
+{
+    mrpt::config::CConfigFileMemory cfg;
+    cfg.setContent(ini);
+    mrpt::maps::TSetOfMetricMapInitializers inits;
+    inits.loadFromConfigFile(cfg, "MetricMap");
+    mrpt::maps::CMultiMetricMap m;
+    m.setListOfMaps(inits);
+    return m;
+}
+}  // namespace
+
+TEST(BearingMapRegistration, IniCreatesTheMapByShortAndFullName)
+{
+    const auto aps = writeTemp("aps.yaml", kApsYaml);
+    auto m = mapFromIni(iniFor(aps));
+    const auto wm = m.mapByClass<CWiFiBearingMap>();
+    ASSERT_TRUE(wm) << "wifiBearingMap_count=1 did not create a CWiFiBearingMap";
+    EXPECT_EQ(wm->transmitters().size(), 3u);
+    EXPECT_EQ(wm->transmitters().at(1).name, "se");
+    // MRPT ignores unknown names silently: a typo creates nothing (why the test above matters).
+    auto typo = mapFromIni(iniFor(aps, "wifiBearingMapp"));
+    EXPECT_FALSE(typo.mapByClass<CWiFiBearingMap>());
+}
+
+TEST(BearingMapRegistration, MissingTransmittersFileIsAnError)
+{
+    EXPECT_ANY_THROW(mapFromIni("[MetricMap]\nwifiBearingMap_count=1\n"));
+    EXPECT_ANY_THROW(mapFromIni(iniFor("/nonexistent/aps.yaml")));
+}
+
+TEST(BearingMapFile, DuplicateMacsAndUnknownKeysAreErrors)
+{
+    const std::string dup =
+        std::string(kApsYaml) + "  - {name: again, mac: '02:00:00:00:0A:01', position: [1, 1]}\n";
+    try
+    {
+        TransmitterMap::fromYamlText(dup, "dup.yaml");
+        FAIL() << "duplicate MAC accepted";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("duplicate MAC 02:00:00:00:0a:01"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("dup.yaml:"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(
+        TransmitterMap::fromYamlText("transmitters:\n  - {mac: '02:00:00:00:00:01', "
+                                     "position: [0, 0], yawdeg: 3}\n"),
+        std::runtime_error);
+    EXPECT_THROW(
+        TransmitterMap::fromYamlText("transmitters:\n  - {mac: 'zz', position: [0, 0]}\n"),
+        std::runtime_error);
+}
+
+TEST(BearingMapFile, ArrayGeometryAndMirror)
+{
+    const auto g = ArrayGeometry::fromElements({{0, 0}, {0, 0.052}, {0, 0.026}, {0, 0.078}});
+    EXPECT_TRUE(g.linear);
+    EXPECT_NEAR(g.axis_rad, M_PI / 2, 1e-12);
+    EXPECT_NEAR(g.mirrorOf(0.3), M_PI - 0.3, 1e-12);  // front/back mirror for an array along y
+    EXPECT_TRUE(g.inFrontHalf(0.3));
+    EXPECT_FALSE(g.inFrontHalf(M_PI - 0.3));
+    const auto sq = ArrayGeometry::fromElements({{0, 0}, {0.03, 0}, {0, 0.03}, {0.03, 0.03}});
+    EXPECT_FALSE(sq.linear);
+    EXPECT_NEAR(sq.mirrorOf(0.3), 0.3, 1e-12);
+}
+
+TEST(BearingMapLikelihood, PeaksAtTheTruePoseAndIsMirrorAware)
+{
+    CWiFiBearingMap map;
+    map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
+    const auto& ap = map.transmitters().at(0);
+    const mrpt::math::TPose2D robot(4, 2, 0.3);
+    BearingRecord r;
+    r.t = 1;
+    r.transmitter = ap.mac;
+    r.hasAoa = true;
+    r.aoaStd = 0.05;
+    const auto s = sensorWorldPose(robot, r.sensorPose);
+    r.aoa = predictAoa(s, ap.pose.x, ap.pose.y);
+    r.hasAod = true;
+    r.aodStd = 0.05;
+    r.aod = predictAod(ap.pose, s.x, s.y);
+    auto obs = observationFromRecord(r);
+    const auto at = [&](double x, double y, double yaw)
+    { return map.computeObservationLikelihood(*obs, mrpt::poses::CPose3D(x, y, 0, yaw, 0, 0)); };
+    const double best = at(robot.x, robot.y, robot.phi);
+    EXPECT_GT(best, at(robot.x + 0.5, robot.y, robot.phi) + 1);
+    EXPECT_GT(best, at(robot.x, robot.y, robot.phi + 0.3) + 1);
+    // Outliers are bounded: an absurd pose is unlikely but not -inf.
+    EXPECT_TRUE(std::isfinite(at(9, 4, 3)));
+
+    // Ambiguous AoA: the robot turned around by the mirror is as likely (AoA alone).
+    map.likelihoodOptions.use.aod = false;
+    r.aoaAmbiguous = true;
+    r.aoaMirror = wrapToPi(M_PI - r.aoa);  // mirror across an array along y
+    obs = observationFromRecord(r);
+    const double trueYaw = at(robot.x, robot.y, robot.phi);
+    // Heading that makes the mirror candidate exact: world bearing = yaw + mirror.
+    const double worldBearing = robot.phi + r.aoa;
+    const double mirrorYaw = worldBearing - r.aoaMirror;
+    EXPECT_NEAR(at(robot.x, robot.y, mirrorYaw), trueYaw, 1e-6);
+    r.aoaAmbiguous = false;
+    obs = observationFromRecord(r);
+    EXPECT_GT(at(robot.x, robot.y, robot.phi), at(robot.x, robot.y, mirrorYaw) + 1);
+}
+
+TEST(BearingMapLikelihood, ZeroForOtherObservationsAndUnknownTransmitters)
+{
+    CWiFiBearingMap map;
+    map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
+    mrpt::obs::CObservationOdometry odo;
+    EXPECT_EQ(map.computeObservationLikelihood(odo, mrpt::poses::CPose3D()), 0.0);
+    EXPECT_FALSE(map.canComputeObservationLikelihood(odo));
+    BearingRecord r;
+    r.transmitter = MacAddress::fromString("02:00:00:00:ff:ff");
+    r.hasAoa = true, r.aoaStd = 0.05;
+    const auto obs = observationFromRecord(r);
+    for (int i = 0; i < 10; ++i)  // as 10 particles would
+        EXPECT_EQ(
+            map.computeObservationLikelihood(*obs, mrpt::poses::CPose3D(i, 0, 0, 0, 0, 0)), 0.0);
+    EXPECT_EQ(map.unknownTransmitterCount(), 1u);  // once per observation, not per particle
+    EXPECT_EQ(map.unknownTransmitters().count(r.transmitter), 1u);
+}
+
+TEST(BearingMapSerialization, RoundTrip)
+{
+    CWiFiBearingMap map;
+    map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
+    map.likelihoodOptions.model.outlierProb = 0.2;
+    mrpt::io::CMemoryStream buf;
+    auto arch = mrpt::serialization::archiveFrom(buf);
+    arch << map;
+    buf.Seek(0);
+    auto obj = arch.ReadObject();
+    auto back = std::dynamic_pointer_cast<CWiFiBearingMap>(obj);
+    ASSERT_TRUE(back);
+    EXPECT_EQ(back->transmitters().size(), 3u);
+    EXPECT_NEAR(back->transmitters().at(2).pose.phi, mrpt::DEG2RAD(-135.0), 1e-9);
+    EXPECT_DOUBLE_EQ(back->likelihoodOptions.model.outlierProb, 0.2);
+}
+
+// The map inside MRPT's own Monte Carlo localization, initialised uniformly over the room (the
+// kidnapped robot), fed one bearing per step as pf-localization does with observation-only
+// rawlogs.
+TEST(BearingMapParticleFilter, GlobalLocalizationConverges)
+{
+    const auto aps =
+        makeAps({{0.3, 4.7, -0.785}, {9.7, 4.7, -2.36}, {9.7, 0.3, 2.36}, {0.3, 0.3, 0.785}});
+    WorldOptions wo;
+    wo.duration_s = 60;
+    const auto w = makeWorld(aps, wo);
+    const auto apsFile = writeTemp("aps.yaml", aps.asYamlText());
+    auto mm = std::make_shared<mrpt::maps::CMultiMetricMap>(mapFromIni(iniFor(apsFile)));
+
+    mrpt::slam::CMonteCarloLocalization2D pdf;
+    pdf.options.metricMap = mm;
+    pdf.resetUniform(0, 10, 0, 5, -M_PI, M_PI, 2000);
+    mrpt::bayes::CParticleFilter pf;
+    pf.m_options.PF_algorithm = mrpt::bayes::CParticleFilter::pfStandardProposal;
+    pf.m_options.BETA = 0.5;
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions mo;
+    mo.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    mo.gaussianModel.minStdXY = 0.01;
+    mo.gaussianModel.minStdPHI = mrpt::DEG2RAD(0.5);
+
+    mrpt::math::TPose2D lastOdo = w.odometry.poses.front();
+    std::vector<double> errs;
+    for (const auto& b : w.bearings)
+    {
+        mrpt::math::TPose2D o;
+        ASSERT_TRUE(w.odometry.interpolate(b.t, o));
+        mrpt::obs::CActionRobotMovement2D act;
+        act.computeFromOdometry(mrpt::poses::CPose2D(o) - mrpt::poses::CPose2D(lastOdo), mo);
+        lastOdo = o;
+        mrpt::obs::CActionCollection acts;
+        acts.insert(act);
+        mrpt::obs::CSensoryFrame sf;
+        sf.insert(observationFromRecord(b));
+        pf.executeOn(pdf, &acts, &sf);
+        mrpt::math::TPose2D gt;
+        ASSERT_TRUE(w.truth.interpolate(b.t, gt));
+        const auto mean = pdf.getMeanVal();
+        errs.push_back(std::hypot(mean.x() - gt.x, mean.y() - gt.y));
+    }
+    // After 20 s (of 60), the error must be small everywhere.
+    std::vector<double> late(errs.begin() + long(errs.size() / 3), errs.end());
+    const auto st = computeStats(late);
+    EXPECT_LT(st.median, 0.3) << st.asString();
+    EXPECT_LT(st.max, 1.0) << st.asString();
+}

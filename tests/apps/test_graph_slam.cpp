@@ -1,0 +1,178 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <gtest/gtest.h>
+#include <mrpt/poses/CPosePDFGaussianInf.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingGraphSlam.h>
+
+#include "SyntheticWorld.h"
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+using namespace mrpt_wifi::loctest;
+
+namespace
+{
+TransmitterMap hallAps()
+{
+    return makeAps(
+        {{0.5, 6.5, -0.785}, {10.5, 6.5, -2.36}, {10.5, -0.5, 2.36}, {0.5, -0.5, 0.785}});
+}
+WorldOptions hallLoop()
+{
+    WorldOptions o;
+    o.duration_s = 240;
+    o.loop = {{2, 1}, {9, 1}, {9, 5}, {2, 5}};
+    return o;
+}
+}  // namespace
+
+TEST(GraphSlamKnownAps, HalvesTheMedianAteOfOdometry)
+{
+    const auto w = makeWorld(hallAps(), hallLoop());
+    GraphSlamInput in;
+    in.odometry = w.odometry;
+    in.bearings = w.bearings;
+    in.aps = w.aps;
+    GraphSlamOptions o;
+    o.apsKnown = true;
+    const auto r = solveBearingGraph(in, o);
+    const auto ate = absoluteTrajectoryError(r.poses, w.truth);
+    const auto odo = absoluteTrajectoryError(r.initialPoses, w.truth);
+    EXPECT_LT(ate.stats.median, 0.5 * odo.stats.median)
+        << "slam " << ate.stats.asString() << " odometry " << odo.stats.asString();
+    EXPECT_LT(ate.stats.median, 0.15) << ate.stats.asString();
+    EXPECT_EQ(r.aoaEdges, w.bearings.size());
+    EXPECT_EQ(r.aodEdges, w.bearings.size());
+    // Known APs fix the frame: the solution is in the world frame without alignment.
+    EXPECT_LT(absoluteTrajectoryError(r.poses, w.truth, false).stats.median, 0.2);
+    EXPECT_EQ(r.graph.nodes.size(), r.poses.size() + 4);
+    EXPECT_EQ(r.graph.edges.size(), r.poses.size() - 1);
+}
+
+TEST(GraphSlamUnknownAps, EstimatesApsAndTrajectory)
+{
+    const auto w = makeWorld(hallAps(), hallLoop());
+    GraphSlamInput in;
+    in.odometry = w.odometry;
+    in.bearings = w.bearings;
+    const auto r = solveBearingGraph(in, GraphSlamOptions());
+    const auto ate = absoluteTrajectoryError(r.poses, w.truth);
+    const auto odo = absoluteTrajectoryError(r.initialPoses, w.truth);
+    EXPECT_LT(ate.stats.median, 0.5 * odo.stats.median)
+        << "slam " << ate.stats.asString() << " odometry " << odo.stats.asString();
+    ASSERT_EQ(r.aps.size(), 4u);
+    // APs in the odometry frame: map them with the trajectory's alignment to compare.
+    const mrpt::poses::CPose2D T(ate.alignment);
+    for (const auto& ap : r.aps.transmitters())
+    {
+        const auto* truth = w.aps.find(ap.mac);
+        ASSERT_TRUE(truth);
+        const auto p = T.composePoint(mrpt::math::TPoint2D(ap.pose.x, ap.pose.y));
+        EXPECT_LT(std::hypot(p.x - truth->pose.x, p.y - truth->pose.y), 0.5) << ap.name;
+    }
+}
+
+TEST(GraphSlamBadInput, EmptyUnconnectedAndNonOverlapping)
+{
+    const auto w = makeWorld(hallAps(), hallLoop());
+    GraphSlamInput in;
+    in.bearings = w.bearings;
+    EXPECT_THROW(solveBearingGraph(in, {}), std::runtime_error);  // no odometry
+
+    // Bearings that never overlap the odometry's time span.
+    in.odometry = w.odometry;
+    auto shifted = w.bearings;
+    for (auto& b : shifted) b.t += 1e6;
+    in.bearings = shifted;
+    try
+    {
+        solveBearingGraph(in, {});
+        FAIL() << "non-overlapping bearings accepted";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("overlap"), std::string::npos) << e.what();
+    }
+
+    // An MRPT graph with a missing edge: two pieces.
+    mrpt::graphs::CNetworkOfPoses2DInf g;
+    Trajectory2D times;
+    for (size_t k = 0; k < 4; ++k)
+    {
+        g.nodes[k] = mrpt::poses::CPose2D(k, 0, 0);
+        times.push_back(w.odometry.t[k * 20], {double(k), 0, 0});
+    }
+    mrpt::poses::CPosePDFGaussianInf e;
+    e.mean = mrpt::poses::CPose2D(1, 0, 0);
+    e.cov_inv.setIdentity();
+    g.insertEdge(0, 1, e);
+    g.insertEdge(2, 3, e);
+    in.odometry = times;
+    in.graph = &g;
+    in.bearings = w.bearings;
+    try
+    {
+        solveBearingGraph(in, {});
+        FAIL() << "unconnected graph accepted";
+    }
+    catch (const std::runtime_error& ex)
+    {
+        EXPECT_NE(std::string(ex.what()).find("not connected"), std::string::npos) << ex.what();
+    }
+}
+
+TEST(GraphSlamBadInput, UnknownTransmittersAreCounted)
+{
+    auto w = makeWorld(hallAps(), hallLoop());
+    GraphSlamInput in;
+    in.odometry = w.odometry;
+    in.bearings = w.bearings;
+    BearingRecord stray = w.bearings.front();
+    stray.transmitter = MacAddress::fromString("02:00:00:00:ee:ee");
+    in.bearings.push_back(stray);
+    in.bearings.push_back(stray);
+    in.aps = w.aps;
+    GraphSlamOptions o;
+    o.apsKnown = true;
+    const auto r = solveBearingGraph(in, o);
+    EXPECT_EQ(r.warnings.unknownTransmitter, 2u);
+}
+
+TEST(GraphSlamMrptGraph, OdometryFromAnMrptGraphFile)
+{
+    // The odometry as an MRPT pose graph on disk (VERTEX_SE2 / EDGE_SE2) + a TUM file of its
+    // node times: the same correction as from raw odometry.
+    const auto w = makeWorld(hallAps(), hallLoop());
+    mrpt::graphs::CNetworkOfPoses2DInf g;
+    Trajectory2D times;
+    for (size_t i = 0, k = 0; i < w.odometry.size(); i += 10, ++k)
+    {
+        g.nodes[k] = mrpt::poses::CPose2D(w.odometry.poses[i]);
+        times.push_back(w.odometry.t[i], w.odometry.poses[i]);
+        if (k == 0) continue;
+        mrpt::poses::CPosePDFGaussianInf e;
+        e.mean = g.nodes[k] - g.nodes[k - 1];
+        e.cov_inv.setZero();
+        e.cov_inv(0, 0) = e.cov_inv(1, 1) = 1 / (0.03 * 0.03);
+        e.cov_inv(2, 2) = 1 / (0.02 * 0.02);
+        g.insertEdge(k - 1, k, e);
+    }
+    const std::string path = mrpt::system::getTempFileName() + ".graph";
+    g.saveToTextFile(path);
+    mrpt::graphs::CNetworkOfPoses2DInf loaded;
+    loaded.loadFromTextFile(path);
+    GraphSlamInput in;
+    in.graph = &loaded;
+    in.odometry = times;
+    in.bearings = w.bearings;
+    in.aps = w.aps;
+    GraphSlamOptions o;
+    o.apsKnown = true;
+    const auto r = solveBearingGraph(in, o);
+    EXPECT_EQ(r.poses.size(), times.size());
+    EXPECT_EQ(r.odometryEdges, times.size() - 1);
+    const auto ate = absoluteTrajectoryError(r.poses, w.truth);
+    const auto odo = absoluteTrajectoryError(r.initialPoses, w.truth);
+    EXPECT_LT(ate.stats.median, 0.5 * odo.stats.median)
+        << "slam " << ate.stats.asString() << " odometry " << odo.stats.asString();
+}

@@ -1,0 +1,155 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <gtest/gtest.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/RawlogIO.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+
+#include <fstream>
+
+#include "SyntheticWorld.h"
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+
+namespace
+{
+std::string writeTemp(const std::string& text)
+{
+    const std::string path = mrpt::system::getTempFileName();
+    std::ofstream(path) << text;
+    return path;
+}
+}  // namespace
+
+TEST(LocalizationCsv, ReadsColumnsInAnyOrderWithEmptyCells)
+{
+    TransmitterMap names = loctest::makeAps({{1, 1, 0}});
+    const auto path = writeTemp(
+        "# comment\n"
+        "transmitter,aod_deg,timestamp,aoa_deg,aoa_std_deg,aoa_mirror_deg\n"
+        "ap1,,1700000000.5,30,2,150\n"
+        "02:00:00:00:0A:01,-10,1700000001.0,,,\n"
+        "ap1,,1700000002.0,,,\n");
+    BearingCsvOptions o;
+    o.names = &names;
+    o.defaultStd_rad = 0.1;
+    InputWarnings w;
+    const auto r = readBearingCsv(path, o, &w);
+    ASSERT_EQ(r.size(), 2u);
+    EXPECT_EQ(w.noAngle, 1u);
+    EXPECT_TRUE(r[0].hasAoa && !r[0].hasAod && r[0].aoaAmbiguous);
+    EXPECT_NEAR(r[0].aoa, mrpt::DEG2RAD(30.0), 1e-12);
+    EXPECT_NEAR(r[0].aoaStd, mrpt::DEG2RAD(2.0), 1e-12);
+    EXPECT_NEAR(r[0].aoaMirror, mrpt::DEG2RAD(150.0), 1e-12);
+    EXPECT_TRUE(!r[1].hasAoa && r[1].hasAod);
+    EXPECT_DOUBLE_EQ(r[1].aodStd, 0.1);
+    EXPECT_EQ(r[1].transmitter, names.at(0).mac);
+}
+
+TEST(LocalizationCsv, ReadsCsiBearingsCsvWithFlagColumns)
+{
+    // The layout `csi-bearings --csv` writes: zeros in the cells of what wasn't measured.
+    const auto path = writeTemp(
+        "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,aoa_ambiguous,"
+        "aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,delay_ns,quality,frames\n"
+        "1700000000.06,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,1,151.8,0,0.000,0.000,0.000,"
+        "0,0.88,1\n"
+        "1700000000.07,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,151.8,1,10,3,170,0,0.88,1\n");
+    const auto r = readBearingCsv(path, {});
+    ASSERT_EQ(r.size(), 2u);
+    EXPECT_TRUE(r[0].hasAoa && r[0].aoaAmbiguous && !r[0].hasAod);
+    EXPECT_TRUE(!r[1].aoaAmbiguous && r[1].hasAod && r[1].aodAmbiguous);
+}
+
+TEST(LocalizationCsv, ErrorsNameTheLine)
+{
+    BearingCsvOptions o;
+    auto expectError = [&](const std::string& text, const std::string& needle)
+    {
+        try
+        {
+            readBearingCsv(writeTemp(text), o);
+            FAIL() << "accepted: " << text;
+        }
+        catch (const std::runtime_error& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+    };
+    expectError("timestamp,transmitter,aoa_deg\n1,02:00:00:00:00:01,abc\n", ":2: column 'aoa_deg'");
+    expectError("timestamp,transmitter,aoa_deg\n1,kitchen-plug,3\n", "kitchen-plug");
+    expectError("timestamp,aoa_deg\n", "'transmitter'");
+    expectError("timestamp,transmitter\n", "'aoa_deg' or 'aod_deg'");
+    expectError("", "empty");
+}
+
+TEST(LocalizationCsv, WriteReadRoundTrip)
+{
+    const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}, {5, 1, 1}}), {});
+    const auto path = mrpt::system::getTempFileName();
+    writeBearingCsv(path, w.bearings);
+    const auto back = readBearingCsv(path, {});
+    ASSERT_EQ(back.size(), w.bearings.size());
+    for (size_t i = 0; i < back.size(); i += 37)
+    {
+        EXPECT_NEAR(back[i].t, w.bearings[i].t, 1e-6);
+        EXPECT_NEAR(std::abs(wrapToPi(back[i].aoa - w.bearings[i].aoa)), 0, 1e-4);
+        EXPECT_NEAR(std::abs(wrapToPi(back[i].aodMirror - w.bearings[i].aodMirror)), 0, 1e-4);
+        EXPECT_EQ(back[i].aoaAmbiguous, w.bearings[i].aoaAmbiguous);
+    }
+}
+
+TEST(LocalizationTrajectory, TumRoundTripAndInterpolation)
+{
+    Trajectory2D t;
+    t.push_back(10.0, {0, 0, 3.0});
+    t.push_back(11.0, {1, 2, -3.0});  // yaw crosses ±π
+    const auto path = mrpt::system::getTempFileName();
+    t.saveTum(path);
+    const auto b = Trajectory2D::fromTumFile(path);
+    ASSERT_EQ(b.size(), 2u);
+    EXPECT_NEAR(b.poses[1].phi, -3.0, 1e-8);
+    mrpt::math::TPose2D p;
+    ASSERT_TRUE(b.interpolate(10.5, p));
+    EXPECT_NEAR(p.x, 0.5, 1e-9);
+    EXPECT_NEAR(std::abs(p.phi), M_PI, 1e-6);  // the short way round
+    EXPECT_FALSE(b.interpolate(9.0, p));
+    EXPECT_FALSE(b.interpolate(10.5, p, 0.5));  // gap too long
+    EXPECT_THROW(Trajectory2D::fromTumFile(writeTemp("1 2 3\n")), std::runtime_error);
+}
+
+TEST(LocalizationTrajectory, AteAlignsRigidlyAsEvo)
+{
+    const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}}), {});
+    // The truth seen from another frame: the ATE after alignment is zero, before it is not.
+    const mrpt::poses::CPose2D T(3, -2, 0.7);
+    Trajectory2D moved;
+    for (size_t i = 0; i < w.truth.size(); i += 10)
+        moved.push_back(w.truth.t[i], (T + mrpt::poses::CPose2D(w.truth.poses[i])).asTPose());
+    const auto a = absoluteTrajectoryError(moved, w.truth, true);
+    EXPECT_LT(a.stats.max, 1e-6);
+    EXPECT_GT(absoluteTrajectoryError(moved, w.truth, false).stats.median, 1.0);
+    // Drifting odometry has a real error even after alignment.
+    EXPECT_GT(absoluteTrajectoryError(w.odometry, w.truth, true).stats.median, 0.1);
+    // No overlap in time: an error, not a number.
+    Trajectory2D late;
+    late.push_back(2e9, {0, 0, 0});
+    late.push_back(2e9 + 1, {0, 0, 0});
+    EXPECT_THROW(absoluteTrajectoryError(late, w.truth), std::runtime_error);
+}
+
+TEST(LocalizationRawlog, PfRawlogRoundTrip)
+{
+    const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}}), {});
+    const auto path = mrpt::system::getTempFileName() + ".rawlog";
+    const size_t n = writePfRawlog(path, w.bearings, w.odometry);
+    EXPECT_EQ(n, w.bearings.size() + w.odometry.size());
+    const auto c = readRawlog(path);
+    ASSERT_EQ(c.bearings.size(), w.bearings.size());
+    EXPECT_EQ(c.odometry.size(), w.odometry.size());
+    EXPECT_NEAR(c.bearings[5].aoa, w.bearings[5].aoa, 1e-12);
+    EXPECT_NEAR(c.bearings[5].sensorPose.x, 0.1, 1e-12);
+    EXPECT_EQ(c.otherObservations, 0u);
+}
