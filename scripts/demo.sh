@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
-# The end-to-end demo: installs what is needed, builds, then runs the whole story on the
-# emulated router, with no hardware:
-#   1. an emulated RT-AC86U (simulated robot among 4 access points) sends Nexmon CSI to
-#      127.0.0.1, and is configured over ssh (a throw-away sshd on 127.0.0.1) by Debian's
-#      rawlog-grabber loading the CWiFiCSISensor plugin, which records a rawlog;
-#   2. Debian's rawlog-edit reads that rawlog through the observation plugin;
-#   3. a capture file (pcap) from the project's encoder becomes a rawlog (csi-pcap2rawlog).
-# Outputs go to demo-output/ (or $DEMO_OUT).
+# The end-to-end demo: installs what is needed, builds, then runs the whole story with no
+# hardware (a few minutes; outputs and PNG plots in demo-output/, or $DEMO_OUT):
+#   1. record: an emulated RT-AC86U (robot among 4 access points, share/scenarios/kidnapped.yaml)
+#      sends Nexmon CSI to 127.0.0.1 and is configured over ssh (a throw-away sshd on
+#      127.0.0.1) by Debian's rawlog-grabber with the CWiFiCSISensor plugin;
+#      Debian's rawlog-edit reads the recording through the observation plugin;
+#   2. calibrate: a short simulated drive of the same router near a known transmitter ->
+#      wifi-calibrate -> the phase calibration file and its report;
+#   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (calibrated);
+#   4. kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap);
+#   5. drift correction: wifi-graphslam on a long drifting drive (share/scenarios/loop.yaml);
+#   6. device mapping: wifi-iot-map on share/scenarios/iot.yaml (its own 2.4 GHz calibration);
+#   7. a tcpdump capture (share/samples/, the project's encoder) -> rawlog (csi-pcap2rawlog).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -21,11 +26,13 @@ pids=()
 cleanup() { for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done; }
 trap cleanup EXIT
 
-echo "== 1. Emulated RT-AC86U + sshd on 127.0.0.1 + rawlog-grabber"
+echo "== 1. Record: emulated RT-AC86U + sshd on 127.0.0.1 + Debian's rawlog-grabber"
+record_s=${DEMO_RECORD_SECONDS:-30}
 port=$((20000 + RANDOM % 20000))
 "$bin/rt-ac86u-emulator" --scenario "$share/scenarios/kidnapped.yaml" --port "$port" --dest 127.0.0.1 \
-  --state-dir "$out/router" --duration 120 --status-period 0 >"$out/emulator.log" 2>&1 &
-pids+=($!)
+  --state-dir "$out/router" --duration $((record_s + 30)) --status-period 0 >"$out/emulator.log" 2>&1 &
+emulator_pid=$!
+pids+=("$emulator_pid")
 sleep 1
 source scripts/loopback-sshd.sh
 start_loopback_sshd "$out/sshd" "$out/router/bin"   # sets SSHD_PORT, SSHD_KEY, SSHD_KNOWN_HOSTS
@@ -36,19 +43,64 @@ sed -e "s|^login_host *=.*|login_host = 127.0.0.1|" -e "s|^login_port *=.*|login
     -e "s|^login_known_hosts *=.*|login_known_hosts = $SSHD_KNOWN_HOSTS|" \
     -e "s|^udp_port *=.*|udp_port = $port|" -e "s|^udp_bind_address *=.*|udp_bind_address = 127.0.0.1|" \
     -e "s|^router_address *=.*|router_address = 127.0.0.1|" -e "s|^channel *=.*|channel = 155/80|" \
-    -e "s|^rawlog_prefix *=.*|rawlog_prefix = recording|" -e "s|^status_period *=.*|status_period = 2|" \
+    -e "s|^rawlog_prefix *=.*|rawlog_prefix = recording|" -e "s|^status_period *=.*|status_period = 5|" \
     "$share/rawlog-grabber/csi_receiver.ini" >"$out/grab.ini"
-(cd "$out" && (sleep 8; echo) | rawlog-grabber -p "$lib/libmrpt_wifi_sensor.so" grab.ini >grabber.log 2>&1)
-grep -E "CWiFiCSISensor" "$out/grabber.log" | cut -c1-220 | tail -6
+(cd "$out" && (sleep "$record_s"; echo) | rawlog-grabber -p "$lib/libmrpt_wifi_sensor.so" grab.ini >grabber.log 2>&1)
+grep -E "CWiFiCSISensor" "$out/grabber.log" | cut -c1-200 | tail -4
 recording=$(ls "$out"/recording_*.rawlog)
+kill -TERM "$emulator_pid" 2>/dev/null || true; wait "$emulator_pid" 2>/dev/null || true
+sim_zero=$(python3 -c "import json; print(json.load(open('$out/router/summary.json'))['emulator']['unix_time_at_sim_zero'])")
+rawlog-edit -p "$lib/libmrpt_wifi_obs.so" --info -i "$recording" 2>/dev/null | grep -E "objects|labels"
+"$bin/csi-export" "$recording" --stats -q 2>/dev/null
+# The robot's true path during the recording: the scenario's truth, on the recording's clock.
+"$bin/wifi-sim" "$share/scenarios/kidnapped.yaml" /dev/null -t "$out/kidnapped_truth" -d $((record_s + 30)) -q >/dev/null
+awk -v z="$sim_zero" '/^#/ {print; next} {$1 = sprintf("%.6f", z + $1 - 1700000000); print}' \
+  "$out/kidnapped_truth/trajectory_tum.txt" >"$out/kidnapped_truth/trajectory_recording_clock.txt"
 
-echo "== 2. Debian's rawlog-edit reads the recording through the plugin"
-rawlog-edit -p "$lib/libmrpt_wifi_obs.so" --info -i "$recording" | grep -E "objects|labels|Sensor"
-"$bin/csi-export" "$recording" --stats -q
+echo "== 2. Calibrate: a 60 s drive of the same router (seed 7) near a transmitter at a known place"
+"$bin/wifi-sim" "$share/scenarios/calibration.yaml" "$out/calibration_drive.rawlog" --seed 7 -d 60 \
+  -t "$out/calibration_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/calibration_drive.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/calibration_truth/transmitters.yaml" --poses "$out/calibration_truth/trajectory_tum.txt" \
+  --out "$out/calib" --report "$out/calib_report" -q
+rm -f "$out/calibration_drive.rawlog"
 
-echo "== 3. A tcpdump capture (share/samples/, made by the project's encoder) -> rawlog"
-"$bin/csi-pcap2rawlog" "$share/samples/sample_4x4_80mhz.pcap" "$out/sample.rawlog" -q
-rawlog-edit -p "$lib/libmrpt_wifi_obs.so" --describe --to-index 0 -i "$out/sample.rawlog" 2>/dev/null |
-  sed -n '/WiFi CSI/,/^---/p' | head -30
+echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs), calibrated"
+"$bin/csi-bearings" "$recording" "$out/bearings.rawlog" --algo aod --calib "$out/calib" \
+  --tx-array "$share/arrays/ap-linear-4.yaml" --csv "$out/bearings.csv" --images "$out/bearing_images" \
+  --image-every 2000 -q
 
-echo "demo: done; outputs in $out"
+echo "== 4. Kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap)"
+"$bin/wifi-pf-localization" "$share/localization/pf-localization-wifi.ini" "$out/bearings.rawlog" \
+  -g "$out/kidnapped_truth/trajectory_recording_clock.txt" -o "$out/pf" -q | tail -12
+
+echo "== 5. Drift correction: wifi-graphslam on a 5-minute drive with drifting odometry (loop.yaml)"
+"$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop.rawlog" -d 300 -t "$out/loop_truth" -q >/dev/null
+"$bin/csi-bearings" "$out/loop.rawlog" "$out/loop_bearings.rawlog" --algo aod \
+  --tx-array "$share/arrays/ap-linear-2.yaml" -q
+rm -f "$out/loop.rawlog"
+# AoD only: loop.yaml turns on the 4366c0's inter-antenna jump states, which a fixed receive
+# calibration cannot follow; the APs' own arrays give the angle of departure regardless.
+"$bin/wifi-graphslam" -r "$out/loop_bearings.rawlog" -a "$share/localization/loop-aps.yaml" --no-aoa \
+  -g "$out/loop_truth/trajectory_tum.txt" -o "$out/graphslam" | tail -8
+
+echo "== 6. Device mapping: wifi-iot-map (iot.yaml; receiver calibrated at 2.4 GHz first)"
+"$bin/wifi-sim" "$share/scenarios/calibration-2g4.yaml" "$out/cal2g4.rawlog" --seed 5 -d 60 \
+  -t "$out/cal2g4_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/cal2g4.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/cal2g4_truth/transmitters.yaml" --poses "$out/cal2g4_truth/trajectory_tum.txt" \
+  --out "$out/calib" -q
+rm -f "$out/cal2g4.rawlog"
+"$bin/wifi-sim" "$share/scenarios/iot.yaml" "$out/iot.rawlog" -d 240 -t "$out/iot_truth" -q >/dev/null
+"$bin/csi-bearings" "$out/iot.rawlog" "$out/iot_bearings.rawlog" --algo aoa_only --calib "$out/calib" -q
+rm -f "$out/iot.rawlog"
+# The robot's own trajectory (here the truth, as a localized robot would have it).
+"$bin/wifi-iot-map" -r "$out/iot_bearings.rawlog" -t "$out/iot_truth/trajectory_tum.txt" \
+  --truth "$out/iot_truth/transmitters.yaml" -o "$out/iot_map" -q | tail -8
+
+echo "== 7. A tcpdump capture (share/samples/, made by the project's encoder) -> rawlog"
+"$bin/csi-pcap2rawlog" "$share/samples/sample_4x4_80mhz.pcap" "$out/sample.rawlog" -q | tail -3
+
+echo
+echo "demo: done. Plots:"
+find "$out" -name "*.png" | sort | sed 's/^/  /' | head -40

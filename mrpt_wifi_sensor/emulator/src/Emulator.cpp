@@ -1,5 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <fcntl.h>
+#include <mrpt/core/Clock.h>
+#include <mrpt/core/format.h>
 #include <mrpt_wifi/emulator/Emulator.h>
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
@@ -185,6 +187,7 @@ struct Emulator::ReplaySource : Emulator::Source
 Emulator::Emulator(EmulatorOptions options)
     : opt_(std::move(options)),
       origin_(std::chrono::steady_clock::now()),
+      unixOrigin_(mrpt::Clock::toDouble(mrpt::Clock::now())),
       router_(opt_.timing),
       faults_(opt_.seed, opt_.faults)
 {
@@ -762,6 +765,9 @@ std::string Emulator::statusJson() const
         .boolean("silenced", now < silencedUntil_)
         .num("uptime_s", now)
         .num("sim_time_s", simAt(now))
+        // Where simulated time 0 fell on the receiver's clock (valid without pause or speed
+        // changes): shifts wifi-sim's ground truth onto a recording's timestamps.
+        .raw("unix_time_at_sim_zero", mrpt::format("%.6f", unixOrigin_ + wallAt(0)))
         .str("stop_reason", toString(stopReason_));
     std::vector<std::string> caps;
     for (const auto& c : captures_)

@@ -163,6 +163,7 @@ private:
 
     EmulatorOptions opt_;
     std::chrono::steady_clock::time_point origin_;
+    double unixOrigin_ = 0;  //!< UNIX time of origin_ (to line recordings up with the truth)
     RouterModel router_;
     FaultInjector faults_;
     std::unique_ptr<LoopbackUdpSender> sender_;
