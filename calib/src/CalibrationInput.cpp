@@ -1,14 +1,13 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/containers/yaml.h>
 #include <mrpt/core/exceptions.h>
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/calib/CalibrationInput.h>
+#include <mrpt_wifi/obs/RawlogReader.h>
 
-#include <chrono>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -89,57 +88,21 @@ void readRawlog(
 {
     if (!mrpt::system::fileExists(path))
         throw std::runtime_error("rawlog '" + path + "': cannot open: no such file");
-    mrpt::io::CFileGZInputStream f;
-    std::string openError;
-    if (!f.open(path, openError))
-        throw std::runtime_error("rawlog '" + path + "': cannot open: " + openError);
-    const double total = double(std::max<uint64_t>(f.getTotalBytesCount(), 1));
-    auto archive = mrpt::serialization::archiveFrom(f);
-    const auto deliver = [&](const mrpt::serialization::CSerializable::Ptr& o)
-    {
-        if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+    forEachRawlogObservation(
+        path,
+        [&](const mrpt::obs::CObservation::Ptr& o)
         {
-            if (onCsi) onCsi(*csi);
-        }
-        else if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o))
-        {
-            if (onOdometry)
-                onOdometry(mrpt::Clock::toDouble(odo->timestamp), odo->odometry.asTPose());
-        }
-    };
-    auto lastReport = std::chrono::steady_clock::now();
-    size_t objects = 0;
-    for (;;)
-    {
-        mrpt::serialization::CSerializable::Ptr obj;
-        try
-        {
-            archive >> obj;
-        }
-        catch (const mrpt::serialization::CExceptionEOF&)
-        {
-            break;
-        }
-        catch (const std::exception& e)
-        {
-            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
-            throw std::runtime_error(
-                "rawlog '" + path + "': unreadable object #" + std::to_string(objects + 1) + ": " +
-                firstLine(e));
-        }
-        ++objects;
-        if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
-            for (const auto& o : *sf) deliver(o);
-        else
-            deliver(obj);
-        if (onProgress &&
-            std::chrono::steady_clock::now() - lastReport > std::chrono::milliseconds(100))
-        {
-            lastReport = std::chrono::steady_clock::now();
-            onProgress(double(f.getPosition()) / total);
-        }
-    }
-    if (onProgress) onProgress(1.0);
+            if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+            {
+                if (onCsi) onCsi(*csi);
+            }
+            else if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o))
+            {
+                if (onOdometry)
+                    onOdometry(mrpt::Clock::toDouble(odo->timestamp), odo->odometry.asTPose());
+            }
+        },
+        onProgress);
 }
 
 RawlogSummary summarizeRawlog(

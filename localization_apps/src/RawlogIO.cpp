@@ -1,12 +1,11 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservationOdometry.h>
-#include <mrpt/obs/CRawlog.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
+#include <mrpt_wifi/obs/RawlogReader.h>
 
 #include <algorithm>
 #include <stdexcept>
@@ -53,30 +52,19 @@ CObservationWiFiBearing::Ptr observationFromRecord(const BearingRecord& r, const
 RawlogContents readRawlog(const std::string& path)
 {
     if (!mrpt::system::fileExists(path)) throw std::runtime_error(path + ": rawlog not found");
-    mrpt::io::CFileGZInputStream f(path);
-    auto arch = mrpt::serialization::archiveFrom(f);
     RawlogContents out;
     std::vector<std::pair<double, mrpt::math::TPose2D>> odo;
-    auto take = [&](const mrpt::obs::CObservation::Ptr& obs)
-    {
-        if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
-            out.bearings.push_back(recordFromObservation(*b));
-        else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs))
-            odo.emplace_back(mrpt::Clock::toDouble(o->timestamp), o->odometry.asTPose());
-        else
-            out.otherObservations++;
-    };
-    mrpt::obs::CActionCollection::Ptr acts;
-    mrpt::obs::CSensoryFrame::Ptr sf;
-    mrpt::obs::CObservation::Ptr obs;
-    size_t entry = 0;
-    while (mrpt::obs::CRawlog::getActionObservationPairOrObservation(arch, acts, sf, obs, entry))
-    {
-        if (obs) take(obs);
-        if (sf)
-            for (const auto& o : *sf) take(o);
-        obs.reset(), sf.reset(), acts.reset();
-    }
+    forEachRawlogObservation(
+        path,
+        [&](const mrpt::obs::CObservation::Ptr& obs)
+        {
+            if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
+                out.bearings.push_back(recordFromObservation(*b));
+            else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs))
+                odo.emplace_back(mrpt::Clock::toDouble(o->timestamp), o->odometry.asTPose());
+            else
+                out.otherObservations++;
+        });
     std::stable_sort(
         odo.begin(), odo.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     for (const auto& [t, p] : odo)

@@ -5,7 +5,6 @@
  * mrpt_wifi::CObservationWiFiBearing, mrpt::obs::CObservationBearingRange and (optionally)
  * CObservationImage pictures; optionally a CSV and PNG files. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
-#include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -14,6 +13,7 @@
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/RawlogReader.h>
 #include <mrpt_wifi/obs/bearing/BearingImages.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
@@ -31,43 +31,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-/** Reads every object of a rawlog, calling `onObject`; `onProgress` gets the read fraction. */
-void forEachObject(
-    const std::string& path,
-    const std::function<void(mrpt::serialization::CSerializable::Ptr&)>& onObject,
-    const std::function<void(double)>& onProgress)
-{
-    mrpt::io::CFileGZInputStream f;
-    std::string err;
-    if (!f.open(path, err)) throw std::runtime_error("rawlog '" + path + "': cannot open: " + err);
-    auto archive = mrpt::serialization::archiveFrom(f);
-    uint64_t count = 0;
-    for (;;)
-    {
-        mrpt::serialization::CSerializable::Ptr obj;
-        try
-        {
-            archive >> obj;
-        }
-        catch (const mrpt::serialization::CExceptionEOF&)
-        {
-            break;
-        }
-        catch (const std::exception& e)
-        {
-            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
-            throw std::runtime_error(
-                "rawlog '" + path + "': unreadable object #" + std::to_string(count + 1) + ": " +
-                mrpt::exception_to_str(e));
-        }
-        ++count;
-        onObject(obj);
-        if (onProgress && (count % 256) == 0)
-            onProgress(
-                double(f.getPosition()) / std::max<double>(1.0, double(f.getTotalBytesCount())));
-    }
-}
-
 std::string findShareFile(const std::string& relative)
 {
     for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
@@ -265,7 +228,7 @@ int main(int argc, char** argv)
             cli::Progress progress("csi-bearings", !argQuiet.getValue());
             std::set<std::pair<uint16_t, unsigned>> shapes;
             uint64_t csiTotal = 0;
-            forEachObject(
+            forEachRawlogObject(
                 argIn.getValue(),
                 [&](mrpt::serialization::CSerializable::Ptr& obj)
                 {
@@ -374,7 +337,7 @@ int main(int argc, char** argv)
             };
 
             std::vector<mrpt::obs::CObservation::Ptr> extra;
-            forEachObject(
+            forEachRawlogObject(
                 argIn.getValue(),
                 [&](mrpt::serialization::CSerializable::Ptr& obj)
                 {

@@ -67,9 +67,11 @@ int main(int argc, char** argv)
             TCLAP::UnlabeledValueArg<std::string> argIn(
                 "input", "Input capture or rawlog", true, "", "IN", cmd);
             TCLAP::ValueArg<std::string> argJsonl(
-                "", "jsonl", "Output JSON Lines file ('-' for stdout)", false, "", "OUT.jsonl", cmd);
+                "", "jsonl", "Output JSON Lines file ('-' for stdout)", false, "", "OUT.jsonl",
+                cmd);
             TCLAP::SwitchArg argStats(
-                "", "stats", "Instead of exporting: frames per transmitter and channel, complete and incomplete",
+                "", "stats",
+                "Instead of exporting: frames per transmitter and channel, complete and incomplete",
                 cmd);
             TCLAP::ValueArg<std::string> argFormat(
                 "f", "format", "Datagram header of captures: auto|nexmon|nexmon-legacy|ubilocate",
@@ -115,9 +117,8 @@ int main(int argc, char** argv)
             try
             {
                 readCsiFrames(
-                    argIn.getValue(), options,
-                    onFrame,
-                    [&](double f) { progress.update(f); }, &summary);
+                    argIn.getValue(), options, onFrame, [&](double f) { progress.update(f); },
+                    &summary);
                 progress.done(std::to_string(summary.frames) + " frames");
             }
             catch (const std::exception& e)
@@ -129,15 +130,20 @@ int main(int argc, char** argv)
                 throw std::runtime_error("writing '" + argJsonl.getValue() + "' failed");
             if (argStats.isSet())
             {
-                std::printf("%-19s %-8s %10s %10s\n", "TRANSMITTER", "CHANNEL", "COMPLETE", "INCOMPLETE");
+                std::printf(
+                    "%-19s %-8s %10s %10s\n", "TRANSMITTER", "CHANNEL", "COMPLETE", "INCOMPLETE");
                 Count total;
                 for (const auto& [key, c] : counts)
                 {
-                    std::printf("%-19s %-8s %10" PRIu64 " %10" PRIu64 "\n", key.first.c_str(), key.second.c_str(), c.complete, c.incomplete);
+                    std::printf(
+                        "%-19s %-8s %10" PRIu64 " %10" PRIu64 "\n", key.first.c_str(),
+                        key.second.c_str(), c.complete, c.incomplete);
                     total.complete += c.complete;
                     total.incomplete += c.incomplete;
                 }
-                std::printf("%-28s %10" PRIu64 " %10" PRIu64 "\n", "total", total.complete, total.incomplete);
+                std::printf(
+                    "%-28s %10" PRIu64 " %10" PRIu64 "\n", "total", total.complete,
+                    total.incomplete);
             }
             std::cerr << summary.asString() << "\n";
             return rc;

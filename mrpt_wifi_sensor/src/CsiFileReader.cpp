@@ -1,7 +1,5 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
-#include <mrpt/io/CFileGZInputStream.h>
-#include <mrpt/obs/CSensoryFrame.h>
-#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/RawlogReader.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
 #include <array>
@@ -80,49 +78,17 @@ void readRawlog(
     const std::string& path, const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,
     const std::function<void(double)>& onProgress, CsiFileReadSummary& summary)
 {
-    mrpt::io::CFileGZInputStream f;
-    std::string openError;
-    if (!f.open(path, openError))
-        throw std::runtime_error("rawlog '" + path + "': cannot open: " + openError);
-    auto archive = mrpt::serialization::archiveFrom(f);
-    ProgressThrottle progress(onProgress);
-    const auto deliver = [&](const mrpt::obs::CObservation::Ptr& o)
-    {
-        if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+    summary.rawlogObjects = forEachRawlogObservation(
+        path,
+        [&](const mrpt::obs::CObservation::Ptr& o)
         {
-            ++summary.frames;
-            onFrame(std::move(csi));
-        }
-    };
-    for (;;)
-    {
-        const uint64_t offset = f.getPosition();
-        mrpt::serialization::CSerializable::Ptr obj;
-        try
-        {
-            archive >> obj;
-        }
-        catch (const mrpt::serialization::CExceptionEOF&)
-        {
-            break;
-        }
-        catch (const std::exception& e)
-        {
-            // MRPT reports a clean end of a gzip stream as EOF, anything else is corruption.
-            if (f.checkEOF() && std::string(e.what()).find("EOF") != std::string::npos) break;
-            throw std::runtime_error(
-                "rawlog '" + path + "': unreadable object #" +
-                std::to_string(summary.rawlogObjects + 1) + " at compressed byte offset " +
-                std::to_string(offset) + ": " + mrpt::exception_to_str(e));
-        }
-        ++summary.rawlogObjects;
-        if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
-            for (const auto& o : *sf) deliver(o);
-        else if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj))
-            deliver(o);
-        progress.update(f.getPosition(), f.getTotalBytesCount());
-    }
-    progress.update(1, 1);
+            if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+            {
+                ++summary.frames;
+                onFrame(std::move(csi));
+            }
+        },
+        onProgress);
 }
 }  // namespace
 

@@ -35,7 +35,7 @@ AntennaArray readAntennaArray(const YamlNode& n)
                     std::to_string(j));
     return a;
 }
-}
+}  // namespace detail
 
 using detail::YamlNode;
 using mrpt::math::TPoint2D;
