@@ -204,6 +204,13 @@ bool CsiFrameAssembler::push(
     }
 
     auto& obs = *p.obs;
+    if (h.core >= obs.nRx)
+    {
+        // A core the frame's first datagram did not announce (UbiLocate masks disagreeing
+        // within one frame): no room for it in this frame's layout. Found by the fuzzer.
+        ++stats_.rejected[size_t(nexmon::RejectReason::BadCoreStream)];
+        return false;
+    }
     if (h.stream >= obs.nTx)
     {
         // The transmitter sends more streams than seen so far: grow (tx-major keeps data put).

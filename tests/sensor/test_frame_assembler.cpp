@@ -268,3 +268,23 @@ TEST(OverwrittenBins, RepairInterpolatesDataSubcarrierAndMasksTheRest)
     EXPECT_EQ(k->csi, before);
     EXPECT_THROW(overwrittenBinPolicyFromString("fix"), std::invalid_argument);
 }
+
+TEST(CsiFrameAssembler, CoreMaskChangingWithinAFrameIsRejectedNotWrittenOutOfBounds)
+{
+    // Regression (libFuzzer): a UbiLocate frame whose first datagram announces two cores and a
+    // later one (same sequence) announces four and carries core 3.
+    Harness h;
+    auto frame =
+        test::syntheticFrame(1, 4, 80, 9, "02:00:00:00:00:0c", NexmonHeaderVariant::UbiLocate);
+    auto first = nexmon::headerFor(*frame, 0, 0);
+    first.coreMask = 0x03;
+    std::vector<uint8_t> d0, d3;
+    nexmon::encodeDatagram(first, frame->pair(0, 0), d0);
+    nexmon::encodeDatagram(nexmon::headerFor(*frame, 0, 3), frame->pair(0, 3), d3);
+    h.push(d0, t0);
+    h.push(d3, t0);
+    h.assembler.flushAll();
+    ASSERT_EQ(h.frames.size(), 1u);
+    EXPECT_EQ(h.frames[0]->nRx, 2);
+    EXPECT_EQ(h.assembler.stats().rejected[size_t(nexmon::RejectReason::BadCoreStream)], 1u);
+}
