@@ -90,7 +90,16 @@ void CWiFiCSISensor::initialize()
     }
     m_state = ssWorking;
 
-    if (!s.routerControl) return;
+    if (!s.routerControl)
+    {
+        // Listening only; the host's own card may still scan for the record.
+        if (s.scanWithHost && s.scanPeriod_s > 0)
+        {
+            worker_ = std::thread([this] { workerLoop(); });
+            requestScan();
+        }
+        return;
+    }
     router_ =
         std::make_unique<NexmonRouterControl>(std::make_shared<SshRouterShell>(s.ssh), s.setup);
     if (s.autoChannel) selector_ = std::make_unique<AccessPointSelector>(s.selector);
@@ -299,19 +308,30 @@ void CWiFiCSISensor::requestChannel(const Chanspec& cs, const std::string& reaso
 void CWiFiCSISensor::requestScan()
 {
     lastScan_ = mrpt::Clock::now();
-    if (!router_) throw std::logic_error("requestScan: router_control is off");
+    const bool host = settings_->scanWithHost;
+    if (!router_ && !host) throw std::logic_error("requestScan: router_control is off");
     {
         std::lock_guard<std::mutex> lk(mutex_);
         if (scanQueued_) return;  // one at a time
         scanQueued_ = true;
     }
     const auto band = settings_->extraction.chanspec.band;
+    const std::string scanner =
+        host ? "host:" + settings_->scanInterface : "router:" + router_->interfaceFor(band);
     postJob(
-        [this, band]
+        [this, band, host, scanner]
         {
-            auto aps = router_->scan(band);
+            auto aps = host ? scanWithHostInterface(
+                                  settings_->scanInterface, settings_->setup.commandTimeout_s)
+                            : router_->scan(band);
+            // Keep the band being captured (the host card also hears the other band).
+            aps.erase(
+                std::remove_if(
+                    aps.begin(), aps.end(),
+                    [&](const ScannedAccessPoint& ap) { return ap.chanspec.band != band; }),
+                aps.end());
             postEvent(
-                [this, aps = std::move(aps)]
+                [this, aps = std::move(aps), scanner]
                 {
                     auto scan = CObservationWiFiScan::Create();
                     scan->timestamp = mrpt::Clock::now();

@@ -48,8 +48,9 @@ const std::set<std::string>& knownKeys()
         "transmitter_mode", "transmitter_mac", "transmitter_rate_hz", "transmitter_streams",
         "transmitter_count",
         // scanning and automatic channel
-        "scan_period", "scan_wait", "auto_channel", "auto_min_rssi_gain_dB", "auto_min_dwell_s",
-        "auto_min_rssi_dBm", "auto_ssid", "auto_mac_filter"};
+        "scan_period", "scan_wait", "scanner", "scan_interface", "auto_channel",
+        "auto_min_rssi_gain_dB", "auto_min_dwell_s", "auto_min_rssi_dBm", "auto_ssid",
+        "auto_mac_filter"};
     return keys;
 }
 
@@ -183,15 +184,23 @@ CsiSensorSettings loadCsiSensorSettings(
             parseUnsigned(str("transmitter_count", "1000"), "transmitter_count", 10000000);
 
         s.scanPeriod_s = c.read_double(section, "scan_period", 0.0);
+        const std::string scanner = str("scanner", "router");
+        if (scanner != "router" && scanner != "host")
+            throw std::invalid_argument(
+                "key 'scanner': '" + scanner + "' (expected router or host)");
+        s.scanWithHost = scanner == "host";
+        s.scanInterface = str("scan_interface", "wlan0");
         s.autoChannel = c.read_bool(section, "auto_channel", false);
         s.autoMacFilter = c.read_bool(section, "auto_mac_filter", true);
         s.selector.minRssiGain_dB = c.read_double(section, "auto_min_rssi_gain_dB", 6.0);
         s.selector.minDwell_s = c.read_double(section, "auto_min_dwell_s", 10.0);
         s.selector.minRssi_dBm = c.read_int(section, "auto_min_rssi_dBm", -85);
         s.selector.ssidFilter = str("auto_ssid", "");
-        if ((s.autoChannel || s.scanPeriod_s > 0 || s.transmitterMode) && !s.routerControl)
+        if ((s.autoChannel || (s.scanPeriod_s > 0 && !s.scanWithHost) || s.transmitterMode) &&
+            !s.routerControl)
             throw std::invalid_argument(
-                "scan_period, auto_channel and transmitter_mode need router_control = true");
+                "auto_channel, transmitter_mode and router-side scans (scan_period with scanner = "
+                "router) need router_control = true");
         if (s.autoChannel && !(s.scanPeriod_s > 0))
             throw std::invalid_argument("auto_channel = true needs scan_period > 0");
     }

@@ -196,6 +196,19 @@ std::vector<ScannedAccessPoint> parseWlScanResults(const std::string& text)
     return aps;
 }
 
+std::vector<ScannedAccessPoint> scanWithHostInterface(const std::string& iface, double timeout_s)
+{
+    const auto r = runSubprocess({"iw", "dev", iface, "scan"}, timeout_s);
+    if (r.timedOut || r.exitCode != 0)
+        throw RouterError(
+            r.timedOut ? RouterErrorKind::Timeout
+                       : (r.exitCode == 127 ? RouterErrorKind::CommandMissing
+                                            : RouterErrorKind::CommandFailed),
+            "host scan 'iw dev " + iface + " scan' (exit " + std::to_string(r.exitCode) + "): " +
+                (r.timedOut ? std::string("timed out") : r.err.substr(0, r.err.find('\n'))));
+    return parseIwScan(r.out);
+}
+
 std::vector<ScannedAccessPoint> parseIwScan(const std::string& text)
 {
     static const std::regex bssRe(R"(^BSS ([0-9a-fA-F:]{17}))");

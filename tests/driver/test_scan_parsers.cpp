@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 
+#include <filesystem>
+#include <fstream>
+
 using namespace mrpt_wifi;
 
 TEST(ScanParsers, WlScanResults)
@@ -56,4 +59,39 @@ TEST(ScanParsers, IwScan)
     EXPECT_EQ(aps[1].chanspec.centerChannel, 6);
     EXPECT_EQ(aps[1].chanspec.band, WifiBand::Band2G4);
     EXPECT_EQ(aps[1].rssi_dBm, -62);
+}
+
+TEST(ScanParsers, HostScanRunsIwAndReportsItsFailure)
+{
+    // A stand-in `iw` first in PATH: the real one needs a WiFi card and CAP_NET_ADMIN.
+    const std::string dir = ::testing::TempDir() + "/fake_iw";
+    std::filesystem::create_directories(dir);
+    {
+        std::ofstream iw(dir + "/iw");
+        iw << "#!/bin/sh\n"
+              "if [ \"$2\" = wlan9 ]; then echo 'command failed: No such device (-19)' >&2; exit "
+              "237; fi\n"
+              "printf 'BSS a0:04:60:12:34:56(on %s)\\n\\tfreq: 5785\\n\\tsignal: -47.00 "
+              "dBm\\n\\tSSID: lab\\n"
+              "\\tVHT operation:\\n\\t\\t * channel width: 1 (80 MHz)\\n\\t\\t * center freq "
+              "segment 1: 155\\n"
+              "\\tHT operation:\\n\\t\\t * primary channel: 157\\n' \"$2\"\n";
+    }
+    std::filesystem::permissions(dir + "/iw", std::filesystem::perms::owner_all);
+    const std::string oldPath = std::getenv("PATH");
+    ::setenv("PATH", (dir + ":" + oldPath).c_str(), 1);
+    const auto aps = scanWithHostInterface("wlan0", 5);
+    ASSERT_EQ(aps.size(), 1u);
+    EXPECT_EQ(aps[0].chanspec.raw, Chanspec::fromString("157/80").raw);
+    EXPECT_EQ(aps[0].rssi_dBm, -47);
+    try
+    {
+        scanWithHostInterface("wlan9", 5);
+        ADD_FAILURE() << "a failing iw must be an error";
+    }
+    catch (const RouterError& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("No such device"), std::string::npos) << e.what();
+    }
+    ::setenv("PATH", oldPath.c_str(), 1);
 }

@@ -52,6 +52,12 @@ TEST(CWiFiCSISensorConfig, WrongKeysAndValuesAreNamed)
     EXPECT_NE(e.find("157/160"), std::string::npos) << e;
     e = loadError("[CSI]\nprocess_rate = 100\nmac_filter = 11:11:1x:*:*:*\n");
     EXPECT_NE(e.find("11:11:1x"), std::string::npos) << e;
+    e = loadError("[CSI]\nprocess_rate = 100\nscanner = radar\n");
+    EXPECT_NE(e.find("'scanner'"), std::string::npos) << e;
+    // The host's own card may scan without router control; router scans may not.
+    EXPECT_EQ(loadError("[CSI]\nprocess_rate = 100\nscan_period = 10\nscanner = host\n"), "");
+    e = loadError("[CSI]\nprocess_rate = 100\nscan_period = 10\n");
+    EXPECT_NE(e.find("router_control"), std::string::npos) << e;
     e = loadError("[CSI]\nprocess_rate = 100\nsource = serial\n");
     EXPECT_NE(e.find("'source'"), std::string::npos) << e;
     e = loadError("[CSI]\nprocess_rate = 100\nsource = pcap\n");

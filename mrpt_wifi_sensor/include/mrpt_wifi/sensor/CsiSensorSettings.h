@@ -42,6 +42,8 @@ struct CsiSensorSettings
     TransmitterSettings transmitter;
 
     double scanPeriod_s = 0;
+    bool scanWithHost = false;  //!< `scanner = host`: the host's `iw` instead of the router
+    std::string scanInterface = "wlan0";
     bool autoChannel = false;
     bool autoMacFilter = true;
     AccessPointSelectorOptions selector;

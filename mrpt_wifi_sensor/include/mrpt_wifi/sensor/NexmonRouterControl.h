@@ -74,6 +74,11 @@ private:
 
 /** Parses `wl scanresults` output (one block per BSS: SSID, RSSI, Channel, BSSID lines). */
 std::vector<ScannedAccessPoint> parseWlScanResults(const std::string& text);
+/** Scans with the host's own WiFi interface (`iw dev IFACE scan`, needs CAP_NET_ADMIN): no
+ * interruption of the router's capture, as WiROS's host-side scan. Throws RouterError with
+ * iw's message if it fails. */
+std::vector<ScannedAccessPoint> scanWithHostInterface(const std::string& iface, double timeout_s);
+
 /** Parses `iw dev IFACE scan` output (BSS, SSID, signal, DS Parameter set / primary channel,
  * VHT operation center segment). */
 std::vector<ScannedAccessPoint> parseIwScan(const std::string& text);
