@@ -37,6 +37,11 @@ TEST(UdpCsiReceiver, DrainsEverythingWithKernelTimestamps)
     o.port = 0;
     UdpCsiReceiver rx(o);
     ASSERT_NE(rx.boundPort(), 0);
+    // The kernel turns packet timestamping on asynchronously when a socket first asks for it;
+    // until then recvmsg stamps at read time. A long-lived receiver only sees that at start.
+    sendLoopback(rx.boundPort(), 1, 64);
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    rx.receive([](auto...) {}, std::chrono::milliseconds(100));
     const auto before = mrpt::Clock::now();
     sendLoopback(rx.boundPort(), 500, 1042);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // arrival ≠ read time
