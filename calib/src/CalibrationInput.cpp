@@ -6,6 +6,7 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/calib/CalibrationInput.h>
+#include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/RawlogReader.h>
 
 #include <fstream>
@@ -16,15 +17,11 @@ namespace mrpt_wifi::calib
 {
 namespace
 {
+/** First line of an exception's message (MRPT banner and backtrace removed). */
 std::string firstLine(const std::exception& e)
 {
-    std::string msg = e.what();
-    const auto pos = msg.find("Message:");
-    if (pos != std::string::npos) msg = msg.substr(pos + 8);
-    const auto eol = msg.find('\n');
-    if (eol != std::string::npos) msg = msg.substr(0, eol);
-    while (!msg.empty() && msg.front() == ' ') msg.erase(msg.begin());
-    return msg;
+    const std::string msg = cli::exceptionMessage(e);
+    return msg.substr(0, msg.find('\n'));
 }
 }  // namespace
 

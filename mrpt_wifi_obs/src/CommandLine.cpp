@@ -67,6 +67,18 @@ void Progress::done(const std::string& detail)
     std::fprintf(stderr, "%s: done in %.2f s\n", label_.c_str(), secs);
 }
 
+std::string exceptionMessage(const std::exception& e)
+{
+    std::string msg = e.what();
+    if (const auto trace = msg.find("Call stack backtrace"); trace != std::string::npos)
+        msg.erase(trace);
+    for (const char* banner : {"==== MRPT exception ====\n", "Message:  "})
+        if (const auto b = msg.find(banner); b != std::string::npos)
+            msg.erase(b, std::strlen(banner));
+    while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
+    return msg;
+}
+
 int runMain(const std::string& program, const std::function<int()>& body)
 {
     try
@@ -75,15 +87,7 @@ int runMain(const std::string& program, const std::function<int()>& body)
     }
     catch (const std::exception& e)
     {
-        // MRPT exceptions carry a banner and a backtrace: a user needs the message.
-        std::string msg = e.what();
-        if (const auto trace = msg.find("Call stack backtrace"); trace != std::string::npos)
-            msg.erase(trace);
-        for (const char* banner : {"==== MRPT exception ====\n", "Message:  "})
-            if (const auto b = msg.find(banner); b != std::string::npos)
-                msg.erase(b, std::strlen(banner));
-        while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
-        std::cerr << program << ": error: " << msg << std::endl;
+        std::cerr << program << ": error: " << exceptionMessage(e) << std::endl;
         return 1;
     }
 }

@@ -2,6 +2,7 @@
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/RawlogReader.h>
 
 #include <algorithm>
@@ -13,13 +14,11 @@ namespace mrpt_wifi
 namespace
 {
 /** The first line of an exception's text (MRPT's carry a backtrace after it). */
+/** First line of an exception's message (MRPT banner and backtrace removed). */
 std::string firstLine(const std::exception& e)
 {
-    std::string s = e.what();
-    for (const char* banner : {"==== MRPT exception ====\n", "Message:  "})
-        if (const auto b = s.find(banner); b != std::string::npos)
-            s.erase(b, std::string(banner).size());
-    return s.substr(0, s.find('\n'));
+    const std::string msg = cli::exceptionMessage(e);
+    return msg.substr(0, msg.find('\n'));
 }
 }  // namespace
 

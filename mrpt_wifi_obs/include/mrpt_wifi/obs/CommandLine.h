@@ -4,6 +4,7 @@
 #include <mrpt/poses/CPose3D.h>
 
 #include <chrono>
+#include <exception>
 #include <functional>
 #include <string>
 #include <vector>
@@ -56,6 +57,10 @@ private:
     bool enabled_;
     std::chrono::steady_clock::time_point start_, lastDraw_;
 };
+
+/** The message of an exception, without the banner and call-stack backtrace MRPT exceptions
+ * carry (what a user should read); trailing white space trimmed. */
+std::string exceptionMessage(const std::exception& e);
 
 /** Runs a program body, turning exceptions into a message on stderr and exit code 1. */
 int runMain(const std::string& program, const std::function<int()>& body);
