@@ -48,15 +48,26 @@ unsigned CObservationWiFiCSI::presentPairs() const
     return unsigned(__builtin_popcountll(presentMask));
 }
 
-const std::vector<int>& CObservationWiFiCSI::dataSubcarriers() const
+std::vector<int> CObservationWiFiCSI::dataSubcarriers() const
 {
-    return mrpt_wifi::dataSubcarriers(chanspec.bandwidthMHz);
+    if (subcarrierIndices.empty()) return mrpt_wifi::dataSubcarriers(chanspec.bandwidthMHz);
+    return {subcarrierIndices.begin(), subcarrierIndices.end()};
+}
+
+std::vector<CObservationWiFiCSI::Complex> CObservationWiFiCSI::scaledCsi() const
+{
+    std::vector<Complex> out;
+    if (scaledCsiFactor == 0.0) return out;
+    out.reserve(csi.size());
+    const auto f = float(scaledCsiFactor);
+    for (const auto& h : csi) out.push_back(h * f);
+    return out;
 }
 
 std::vector<CObservationWiFiCSI::Complex> CObservationWiFiCSI::dataSubcarrierCsi(
     unsigned tx, unsigned rx) const
 {
-    const auto& ks = dataSubcarriers();
+    const auto ks = dataSubcarriers();
     const unsigned n = nfft();
     const Complex* p = pair(tx, rx);
     std::vector<Complex> out;
@@ -73,9 +84,11 @@ std::vector<double> CObservationWiFiCSI::dataSubcarrierFrequencies() const
 }
 
 // ---------------------------------------------------------------- serialization
+// Version 0: the BCM4366c0 fields. Version 1 (issue 13): + source, subcarrierIndices,
+// antennaRssi_dB, noiseFloor_dBm, agc_dB, scaledCsiFactor.
 uint8_t CObservationWiFiCSI::serializeGetVersion() const
 {
-    return 0;
+    return 1;
 }
 
 void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
@@ -88,6 +101,9 @@ void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
     out.WriteAs<uint32_t>(csi.size());
     // std::complex<float> is two contiguous floats by the standard: write them as such.
     out.WriteBufferFixEndianness(reinterpret_cast<const float*>(csi.data()), csi.size() * 2);
+    // version 1
+    out << source << subcarrierIndices << antennaRssi_dB << noiseFloor_dBm << agc_dB
+        << scaledCsiFactor;
 }
 
 void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -95,6 +111,7 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
     switch (version)
     {
         case 0:
+        case 1:
         {
             in >> timestamp >> sensorLabel >> sensorPose;
             in.ReadBuffer(transmitter.bytes.data(), transmitter.bytes.size());
@@ -118,6 +135,26 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
                     nTx, nRx, chanspec.nfft());
             csi.resize(n);
             in.ReadBufferFixEndianness(reinterpret_cast<float*>(csi.data()), size_t(n) * 2);
+            if (version >= 1)
+            {
+                in >> source >> subcarrierIndices >> antennaRssi_dB >> noiseFloor_dBm >> agc_dB >>
+                    scaledCsiFactor;
+                const int half = int(chanspec.nfft() / 2);
+                for (auto k : subcarrierIndices)
+                    if (k < -half || k >= half)
+                        THROW_EXCEPTION_FMT(
+                            "CObservationWiFiCSI: stored subcarrier %d outside a %u-point FFT",
+                            int(k), chanspec.nfft());
+            }
+            else
+            {
+                // Version 0 was written only for the BCM4366c0 (RT-AC86U) and the simulator.
+                source = "bcm4366c0";
+                subcarrierIndices.clear();
+                antennaRssi_dB.clear();
+                noiseFloor_dBm = agc_dB = std::numeric_limits<float>::quiet_NaN();
+                scaledCsiFactor = 0.0;
+            }
         }
         break;
         default:
@@ -136,7 +173,7 @@ struct PairSummary
 
 PairSummary summarize(const CObservationWiFiCSI& o, unsigned tx, unsigned rx)
 {
-    const auto& ks = o.dataSubcarriers();
+    const auto ks = o.dataSubcarriers();
     const unsigned n = o.nfft();
     const auto* p = o.pair(tx, rx);
     double sumMag = 0;
@@ -160,10 +197,12 @@ PairSummary summarize(const CObservationWiFiCSI& o, unsigned tx, unsigned rx)
 void CObservationWiFiCSI::getDescriptionAsText(std::ostream& o) const
 {
     CObservation::getDescriptionAsText(o);
-    o << "WiFi CSI (Nexmon) frame\n";
+    o << "WiFi CSI frame from " << source << "\n";
     o << "  Transmitter MAC      : " << transmitter.asString() << "\n";
     o << "  RSSI                 : ";
-    if (headerVariant == NexmonHeaderVariant::Nexmon)
+    if (source == "iwl5300" || source == "esp32")
+        o << int(rssi_dBm) << " dBm\n";
+    else if (headerVariant == NexmonHeaderVariant::Nexmon)
         o << int(rssi_dBm) << " dBm\n";
     else
         o << "not reported by the " << toString(headerVariant) << " header\n";
@@ -182,6 +221,20 @@ void CObservationWiFiCSI::getDescriptionAsText(std::ostream& o) const
         o << " (firmware counter " << firmwareCounter << ")";
     o << "\n  Router address       : " << routerAddress << "\n";
     o << "  Sensor pose on robot : " << sensorPose.asString() << "\n";
+    if (!antennaRssi_dB.empty())
+    {
+        o << "  RSSI per antenna [dB]:";
+        for (float r : antennaRssi_dB) o << " " << r;
+        o << "\n";
+    }
+    if (!std::isnan(noiseFloor_dBm)) o << "  Noise floor          : " << noiseFloor_dBm << " dBm\n";
+    if (!std::isnan(agc_dB)) o << "  AGC gain             : " << agc_dB << " dB\n";
+    if (scaledCsiFactor != 0.0)
+        o << "  Scaled CSI           : raw x " << std::setprecision(6) << scaledCsiFactor
+          << " (the source's own scaling)\n";
+    if (!subcarrierIndices.empty())
+        o << "  Subcarriers          : " << subcarrierIndices.size() << " reported ("
+          << subcarrierIndices.front() << " .. " << subcarrierIndices.back() << ")\n";
     o << "  Shape                : " << int(nTx) << " tx x " << int(nRx) << " rx x " << nfft()
       << " bins (" << dataSubcarriers().size() << " data subcarriers), " << presentPairs() << "/"
       << int(nTx) * int(nRx) << " pairs present\n";
@@ -228,7 +281,7 @@ std::string CObservationWiFiCSI::exportTxtDataRow() const
       << chanspec.bandwidthMHz << " " << int(nTx) << " " << int(nRx) << " " << presentMask << " "
       << (mac >> 24) << " " << (mac & 0xFFFFFF);
     o << std::setprecision(7);
-    const auto& ks = dataSubcarriers();
+    const auto ks = dataSubcarriers();
     for (unsigned tx = 0; tx < nTx; ++tx)
         for (unsigned rx = 0; rx < nRx; ++rx)
         {

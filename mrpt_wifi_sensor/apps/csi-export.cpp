@@ -4,7 +4,10 @@
  * frame, for Python/MATLAB users. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
+
+#include <cmath>
 
 #include <cinttypes>
 #include <cstdio>
@@ -34,7 +37,17 @@ void writeJsonLine(std::FILE* f, const CObservationWiFiCSI& o)
             std::fprintf(f, "%s%s", rx ? "," : "", o.isPresent(tx, rx) ? "true" : "false");
         std::fputc(']', f);
     }
-    std::fputs("],\"csi\":[", f);
+    std::fprintf(f, "],\"source\":\"%s\",\"subcarriers\":[", o.source.c_str());
+    const auto ks = o.dataSubcarriers();
+    for (size_t i = 0; i < ks.size(); ++i) std::fprintf(f, "%s%d", i ? "," : "", ks[i]);
+    std::fputs("],\"rssi_antennas\":[", f);
+    for (size_t i = 0; i < o.antennaRssi_dB.size(); ++i)
+        std::fprintf(f, "%s%.9g", i ? "," : "", o.antennaRssi_dB[i]);
+    std::fputc(']', f);
+    if (!std::isnan(o.noiseFloor_dBm)) std::fprintf(f, ",\"noise_floor\":%.9g", o.noiseFloor_dBm);
+    if (!std::isnan(o.agc_dB)) std::fprintf(f, ",\"agc\":%.9g", o.agc_dB);
+    if (o.scaledCsiFactor != 0.0) std::fprintf(f, ",\"csi_scale\":%.17g", o.scaledCsiFactor);
+    std::fputs(",\"csi\":[", f);
     for (unsigned tx = 0; tx < o.nTx; ++tx)
     {
         std::fputs(tx ? ",[" : "[", f);
@@ -59,10 +72,13 @@ int main(int argc, char** argv)
         [&]
         {
             TCLAP::CmdLine cmd(
-                "Exports the CSI frames of a Nexmon capture (.pcap/.pcapng) or an mrpt_wifi "
-                "rawlog as JSON Lines: one object per frame with timestamp, seq, mac, rssi, "
-                "chanspec, channel, bw, nfft, chip, n_rx, n_tx, present[tx][rx] and "
-                "csi[tx][rx][bin] = [re, im] in subcarrier order (bin = k + nfft/2).",
+                "Exports the CSI frames of a capture in any supported format (Nexmon pcap of any "
+                "chip, Intel 5300 .dat, ESP32 CSI_DATA lines) or an mrpt_wifi rawlog as JSON "
+                "Lines: one object per frame with timestamp, seq, mac, rssi, chanspec, channel, "
+                "bw, nfft, chip, n_rx, n_tx, present[tx][rx], source, subcarriers (the indices k "
+                "that carry a measurement), rssi_antennas, noise_floor / agc / csi_scale when "
+                "the source reports them, and csi[tx][rx][bin] = [re, im] in subcarrier order "
+                "(bin = k + nfft/2; the source's raw values, scaled = csi_scale * csi).",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(
                 "input", "Input capture or rawlog", true, "", "IN", cmd);
@@ -74,8 +90,13 @@ int main(int argc, char** argv)
                 "Instead of exporting: frames per transmitter and channel, complete and incomplete",
                 cmd);
             TCLAP::ValueArg<std::string> argFormat(
-                "f", "format", "Datagram header of captures: auto|nexmon|nexmon-legacy|ubilocate",
-                false, "auto", "FORMAT", cmd);
+                "f", "format",
+                "Input format (or the Nexmon header variant): " + formatOptionChoices(), false,
+                "auto", "FORMAT", cmd);
+            TCLAP::ValueArg<std::string> argChannel(
+                "", "channel",
+                "Channel CH/BW for formats whose records carry none (Intel 5300 .dat)", false, "",
+                "CH/BW", cmd);
             TCLAP::ValueArg<std::string> argBins(
                 "", "overwritten-bins", "Firmware-overwritten bins of captures: keep|repair|mask",
                 false, "repair", "POLICY", cmd);
@@ -87,9 +108,10 @@ int main(int argc, char** argv)
                 rc >= 0)
                 return rc;
 
-            CsiFileReadOptions options;
+            CsiDecodeOptions options;
             options.udpPort = uint16_t(argPort.getValue());
-            options.assembler.format = nexmon::formatHintFromString(argFormat.getValue());
+            const std::string format = applyFormatOption(argFormat.getValue(), options);
+            if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
 
             if (argJsonl.isSet() == argStats.isSet())
@@ -112,13 +134,13 @@ int main(int argc, char** argv)
             };
 
             cli::Progress progress("csi-export", !argQuiet.getValue() && !toStdout);
-            CsiFileReadSummary summary;
+            CsiDecodeSummary summary;
             int rc = 0;
             try
             {
-                readCsiFrames(
-                    argIn.getValue(), options, onFrame, [&](double f) { progress.update(f); },
-                    &summary);
+                decodeCsiFile(
+                    argIn.getValue(), format, options, onFrame,
+                    [&](double f) { progress.update(f); }, &summary);
                 progress.done(std::to_string(summary.frames) + " frames");
             }
             catch (const std::exception& e)

@@ -1,12 +1,16 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.
  *
- * csi-pcap2rawlog: converts a tcpdump capture of Nexmon CSI datagrams into an MRPT rawlog of
- * mrpt_wifi::CObservationWiFiCSI, one observation per overheard frame. */
+ * csi-import (also built as csi-pcap2rawlog, its first name): converts a CSI capture of any
+ * supported source (Nexmon pcap of any chip, Intel 5300 .dat, ESP32 CSI_DATA lines) into an
+ * MRPT rawlog of mrpt_wifi::CObservationWiFiCSI, one observation per overheard frame. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
+
+#include <filesystem>
 
 #include <iostream>
 
@@ -14,16 +18,23 @@ using namespace mrpt_wifi;
 
 int main(int argc, char** argv)
 {
+    const std::string program = std::filesystem::path(argv[0]).filename().string();
     return cli::runMain(
-        "csi-pcap2rawlog",
+        program,
         [&]
         {
+            std::string formats;
+            for (const auto& d : CsiDecoderRegistry::instance().all())
+                if (d->name() != "rawlog") formats += "\n  " + d->name() + ": " + d->description();
             TCLAP::CmdLine cmd(
-                "Converts a tcpdump capture (pcap/pcapng) of Nexmon CSI datagrams from an "
-                "RT-AC86U into an MRPT rawlog of mrpt_wifi::CObservationWiFiCSI observations.",
+                "Converts a CSI capture into an MRPT rawlog of mrpt_wifi::CObservationWiFiCSI "
+                "observations. The format is detected from the content (not the file name); "
+                "--format forces one. Formats:" +
+                    formats,
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(
-                "input", "Input capture (.pcap, .pcapng)", true, "", "IN.pcap", cmd);
+                "input", "Input capture (.pcap, .pcapng, .dat, .csv/.txt of CSI_DATA lines)", true,
+                "", "IN", cmd);
             TCLAP::UnlabeledValueArg<std::string> argOut(
                 "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
             TCLAP::ValueArg<std::string> argLabel(
@@ -34,8 +45,13 @@ int main(int argc, char** argv)
                 "Pose of the receive array on the robot: x y z yaw pitch roll (m, deg)", false,
                 "0 0 0 0 0 0", "x y z yaw pitch roll", cmd);
             TCLAP::ValueArg<std::string> argFormat(
-                "f", "format", "Datagram header: auto|nexmon|nexmon-legacy|ubilocate", false,
+                "f", "format",
+                "Input format (or the Nexmon header variant): " + formatOptionChoices(), false,
                 "auto", "FORMAT", cmd);
+            TCLAP::ValueArg<std::string> argChannel(
+                "", "channel",
+                "Channel CH/BW for formats whose records carry none (Intel 5300 .dat)", false, "",
+                "CH/BW", cmd);
             TCLAP::ValueArg<std::string> argBins(
                 "", "overwritten-bins", "Firmware-overwritten bins: keep|repair|mask", false,
                 "repair", "POLICY", cmd);
@@ -51,29 +67,34 @@ int main(int argc, char** argv)
             if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
                 return rc;
 
-            CsiFileReadOptions options;
+            CsiDecodeOptions options;
             options.udpPort = uint16_t(argPort.getValue());
-            options.assembler.format = nexmon::formatHintFromString(argFormat.getValue());
+            const std::string format = applyFormatOption(argFormat.getValue(), options);
+            if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
             options.assembler.frameTimeout_s = argTimeout.getValue();
             options.assembler.sensorLabel = argLabel.getValue();
             options.assembler.sensorPose = cli::poseFromText(argPose.getValue(), "--sensor-pose");
-            if (detectCsiFileKind(argIn.getValue()) != CsiFileKind::Pcap)
-                throw std::runtime_error("'" + argIn.getValue() + "' is not a pcap/pcapng capture");
+            const auto decoder = format == "auto"
+                                     ? CsiDecoderRegistry::instance().detect(argIn.getValue())
+                                     : CsiDecoderRegistry::instance().find(format);
+            if (decoder->name() == "rawlog")
+                throw std::runtime_error(
+                    "'" + argIn.getValue() + "' is already a rawlog, not a capture");
 
             mrpt::io::CFileGZOutputStream out;
             if (!out.open(argOut.getValue()))
                 throw std::runtime_error("cannot create rawlog '" + argOut.getValue() + "'");
             auto archive = mrpt::serialization::archiveFrom(out);
 
-            cli::Progress progress("csi-pcap2rawlog", !argQuiet.getValue());
-            CsiFileReadSummary summary;
+            cli::Progress progress(program, !argQuiet.getValue());
+            CsiDecodeSummary summary;
             uint64_t written = 0;
             int rc = 0;
             try
             {
-                readCsiFrames(
-                    argIn.getValue(), options,
+                decodeCsiFile(
+                    argIn.getValue(), decoder->name(), options,
                     [&](CObservationWiFiCSI::Ptr&& obs)
                     {
                         archive << *obs;
@@ -87,7 +108,7 @@ int main(int argc, char** argv)
             {
                 // Everything converted before the fault is already in the rawlog, which the
                 // stream closes cleanly below.
-                std::cerr << "\ncsi-pcap2rawlog: error: " << e.what() << "\n";
+                std::cerr << "\n" << program << ": error: " << e.what() << "\n";
                 rc = 1;
             }
             out.close();

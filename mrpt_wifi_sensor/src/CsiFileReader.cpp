@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt_wifi/obs/RawlogReader.h>
+#include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
 #include <array>
@@ -11,29 +12,6 @@ namespace mrpt_wifi
 {
 namespace
 {
-constexpr double kProgressStep = 0.01;
-
-/** Calls onProgress when the fraction has moved by at least a step. */
-class ProgressThrottle
-{
-public:
-    explicit ProgressThrottle(const std::function<void(double)>& f) : f_(f) {}
-    void update(uint64_t done, uint64_t total)
-    {
-        if (!f_ || !total) return;
-        const double fraction = std::min(1.0, double(done) / double(total));
-        if (fraction - last_ >= kProgressStep || fraction >= 1.0)
-        {
-            last_ = fraction;
-            f_(fraction);
-        }
-    }
-
-private:
-    const std::function<void(double)>& f_;
-    double last_ = -1.0;
-};
-
 void readCapture(
     const std::string& path, const CsiFileReadOptions& options,
     const std::function<void(CObservationWiFiCSI::Ptr&&)>& onFrame,

@@ -193,7 +193,13 @@ bool CsiFrameAssembler::push(
         const bool haveReference = p.obs || p.hasEmitted;
         const uint16_t reference = p.obs ? uint16_t(p.sequenceControl >> 4) : p.lastEmittedSequence;
         const uint16_t behind = uint16_t((reference - h.sequenceNumber()) & (kSequenceModulo - 1));
-        if (haveReference && behind < kLateWindow && !(p.obs && behind == 0))
+        // The Raspberry Pi's firmware (BCM43455c0) and other non-4366c0 chips may report the
+        // same sequence number for every frame: a pair the last frame already had then starts
+        // a new frame rather than being late.
+        const uint64_t bit = uint64_t(1) << (h.stream * CObservationWiFiCSI::kMaxChains + h.core);
+        const bool repeatsSequence = h.chip != nexmon::Chip::BCM4366c0 && !p.obs && behind == 0 &&
+                                     (p.lastEmittedMask & bit);
+        if (haveReference && behind < kLateWindow && !(p.obs && behind == 0) && !repeatsSequence)
         {
             ++stats_.lateDatagrams;
             p.streamsSeen |= uint8_t(1u << h.stream);  // still teaches what the AP sends
@@ -219,11 +225,23 @@ bool CsiFrameAssembler::push(
     }
     if (obs.isPresent(h.stream, h.core))
     {
-        ++stats_.duplicates;
-        return true;
+        if (h.chip == nexmon::Chip::BCM4366c0)
+        {
+            ++stats_.duplicates;
+            return true;
+        }
+        // Non-4366c0 firmware repeating the sequence number: this pair starts the next frame.
+        emit(p);
+        startFrame(p, h, arrival, source);
     }
-    nexmon::decodeWords(data + nexmon::csiOffset(), h.nfft(), obs.pair(h.stream, h.core));
-    obs.setPresent(h.stream, h.core);
+    auto& cur = *p.obs;
+    if (h.stream >= cur.nTx)
+    {
+        cur.nTx = uint8_t(h.stream + 1);
+        cur.csi.resize(size_t(cur.nTx) * cur.nRx * cur.nfft());
+    }
+    nexmon::decodeWords(h.chip, data + nexmon::csiOffset(), h.nfft(), cur.pair(h.stream, h.core));
+    cur.setPresent(h.stream, h.core);
     p.streamsSeen |= uint8_t(1u << h.stream);
     ++stats_.accepted;
     if (frameComplete(p)) emit(p);
@@ -238,7 +256,9 @@ void CsiFrameAssembler::startFrame(
     p.chanspecRaw = h.chanspec.raw;
     p.firmwareCounter = h.firmwareCounter;
     p.firstArrival = arrival;
-    p.expectedCores = h.coreMask ? uint8_t(h.coreMask & options_.coreMask) : options_.coreMask;
+    const auto chipCoreMask = uint8_t((1u << nexmon::chipCores(h.chip)) - 1);
+    p.expectedCores = h.coreMask ? uint8_t(h.coreMask & options_.coreMask)
+                                 : uint8_t(options_.coreMask & chipCoreMask);
     if (h.streamMask)
     {
         p.streamsSeen |= uint8_t(h.streamMask & options_.streamMask);
@@ -257,6 +277,7 @@ void CsiFrameAssembler::startFrame(
     obs->frameControl = h.frameControl;
     obs->chanspec = h.chanspec;
     obs->chipId = h.chipId;
+    obs->source = nexmon::toString(h.chip);
     obs->firmwareCounter = h.firmwareCounter;
     obs->headerVariant = h.variant;
     obs->routerAddress = source;
@@ -282,8 +303,11 @@ void CsiFrameAssembler::emit(Pending& p)
         const uint64_t expected = pairMask(p.expectedCores, p.streamsSeen);
         stats_.missingPairs += uint64_t(__builtin_popcountll(expected & ~p.obs->presentMask));
     }
-    applyOverwrittenBinPolicy(*p.obs, options_.overwrittenBins);
+    // Only the 4366c0 firmware overwrites CSI words with PHY status (DESIGN.md §4).
+    if (p.obs->source == nexmon::toString(nexmon::Chip::BCM4366c0))
+        applyOverwrittenBinPolicy(*p.obs, options_.overwrittenBins);
     p.lastEmittedSequence = p.obs->sequenceNumber;
+    p.lastEmittedMask = p.obs->presentMask;
     p.hasEmitted = true;
     onFrame_(std::move(p.obs));
     p.obs.reset();

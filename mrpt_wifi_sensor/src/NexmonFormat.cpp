@@ -43,6 +43,65 @@ bool isFourByteMagic(const uint8_t* p)
 }
 }  // namespace
 
+const char* toString(Chip c)
+{
+    switch (c)
+    {
+        case Chip::BCM4366c0:
+            return "bcm4366c0";
+        case Chip::BCM43455c0:
+            return "bcm43455c0";
+        case Chip::BCM4358:
+            return "bcm4358";
+        case Chip::BCM4339:
+            return "bcm4339";
+    }
+    return "?";
+}
+
+bool chipFromWord(uint16_t word, Chip& out)
+{
+    switch (word)
+    {
+        case kChip4366c0:
+            out = Chip::BCM4366c0;
+            return true;
+        case kChip43455c0:
+            out = Chip::BCM43455c0;
+            return true;
+        case kChip4358:
+        case kChip4358Example:
+            out = Chip::BCM4358;
+            return true;
+        case kChip4339:
+            out = Chip::BCM4339;
+            return true;
+        default:
+            return false;
+    }
+}
+
+unsigned chipCores(Chip c)
+{
+    switch (c)
+    {
+        case Chip::BCM4366c0:
+            return 4;
+        case Chip::BCM4358:
+            return 2;
+        case Chip::BCM43455c0:
+        case Chip::BCM4339:
+            return 1;
+    }
+    return 0;
+}
+
+bool chipSupportsBandwidth(Chip, unsigned bandwidthMHz)
+{
+    // nexmon_csi: "up to 80 MHz bandwidth" on all four chips; the 2.4 GHz band at 20/40.
+    return bandwidthMHz == 20 || bandwidthMHz == 40 || bandwidthMHz == 80;
+}
+
 const char* toString(RejectReason r)
 {
     switch (r)
@@ -168,22 +227,31 @@ bool parseHeader(
     }
     else
     {
-        if (word16 != kChip4366c0)
+        if (!chipFromWord(word16, h.chip))
         {
             why = RejectReason::UnknownChip;
             return false;
         }
         h.chipId = word16;
-        // 4366c0: core in bits 8–10, stream in bits 11–13 (not the low bits other chips use).
-        h.core = uint8_t((csiconf >> 8) & 0x7);
-        h.stream = uint8_t((csiconf >> 11) & 0x7);
+        if (h.chip == Chip::BCM4366c0)
+        {
+            // 4366c0: core in bits 8–10, stream in bits 11–13.
+            h.core = uint8_t((csiconf >> 8) & 0x7);
+            h.stream = uint8_t((csiconf >> 11) & 0x7);
+        }
+        else
+        {
+            // The other chips: core in bits 0–2, stream in bits 3–5 (nexmon_csi README).
+            h.core = uint8_t(csiconf & 0x7);
+            h.stream = uint8_t((csiconf >> 3) & 0x7);
+        }
         if (variant == NexmonHeaderVariant::Nexmon)
         {
             h.rssi_dBm = int8_t(data[2]);
             h.frameControl = data[3];
         }
     }
-    const bool coreOk = h.core < kMaxCores && (!h.coreMask || ((h.coreMask >> h.core) & 1));
+    const bool coreOk = h.core < chipCores(h.chip) && (!h.coreMask || ((h.coreMask >> h.core) & 1));
     const bool streamOk =
         h.stream < kMaxStreams && (!h.streamMask || ((h.streamMask >> h.stream) & 1));
     if (!coreOk || !streamOk)
@@ -256,6 +324,38 @@ std::complex<float> unpackWord(uint32_t w)
     float reIm[2];
     decodeRun(bytes, 1, reIm);
     return {reIm[0], reIm[1]};
+}
+
+std::complex<float> unpackWord4358(uint32_t w)
+{
+    // nexmon_csi unpack_float format 0: nman = 9 (8-bit magnitude + sign), nexp = 5.
+    const int exponent = int32_t(w << 27) >> 27;
+    const float scale = std::ldexp(1.0f, exponent);
+    const int mi = int((w >> 5) & 0xFF), mr = int((w >> 14) & 0xFF);
+    const float re = float((w >> 22) & 1u ? -mr : mr) * scale;
+    const float im = float((w >> 13) & 1u ? -mi : mi) * scale;
+    return {re, im};
+}
+
+void decodeWords(Chip chip, const uint8_t* words, unsigned nfft, std::complex<float>* out)
+{
+    if (chip == Chip::BCM4366c0)
+    {
+        decodeWords(words, nfft, out);
+        return;
+    }
+    const unsigned half = nfft / 2;
+    for (unsigned i = 0; i < nfft; ++i)
+    {
+        const uint8_t* p = words + 4 * i;
+        std::complex<float> v;
+        if (chip == Chip::BCM4358)
+            v = unpackWord4358(uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
+                               uint32_t(p[3]) << 24);
+        else
+            v = {float(int16_t(readLE16(p))), float(int16_t(readLE16(p + 2)))};
+        out[(i + half) & (nfft - 1)] = v;
+    }
 }
 
 void decodeWords(const uint8_t* words, unsigned nfft, std::complex<float>* out)

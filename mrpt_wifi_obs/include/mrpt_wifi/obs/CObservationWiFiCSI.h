@@ -8,6 +8,7 @@
 
 #include <complex>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,18 @@ const char* toString(NexmonHeaderVariant v);
  *  transmit stream × receive antenna × subcarrier bin, with the frame's metadata.
  *
  * The CSI is stored in subcarrier order over all NFFT bins (bin = k + NFFT/2, i.e. after
- * fftshift), as `csi[(tx * nRx + rx) * nfft + bin]`, scaled as the hardware reports it
- * (mantissa · 2^exponent). Pairs that did not arrive are flagged in `presentMask` and hold
- * zeros.
+ * fftshift), as `csi[(tx * nRx + rx) * nfft + bin]`, as the hardware reports it (raw: e.g.
+ * mantissa · 2^exponent on the BCM4366c0, the int8 I/Q of an Intel 5300 or an ESP32). Pairs
+ * that did not arrive are flagged in `presentMask` and hold zeros.
+ *
+ * Sources that report only some subcarriers (Intel 5300: 30 grouped ones; ESP32: the L-LTF)
+ * list them in `subcarrierIndices`; the other bins hold zeros and dataSubcarriers() returns
+ * that list instead of the bandwidth's standard one. Where the source defines a scaling to
+ * physical units (Intel's get_scaled_csi), `scaledCsiFactor` holds it: scaledCsi() = factor ·
+ * csi.
+ *
+ * Serialization version 1 adds the source fields below; version 0 rawlogs (all from the
+ * BCM4366c0) still load, with source = "bcm4366c0".
  */
 class CObservationWiFiCSI : public mrpt::obs::CObservation
 {
@@ -59,6 +69,23 @@ public:
      *  were masked (zeroed) rather than repaired. */
     std::vector<uint16_t> maskedBins;
     std::vector<Complex> csi;  //!< [tx][rx][bin], see class docs
+
+    /** Radio / format that produced the frame: "bcm4366c0", "bcm43455c0", "bcm4358",
+     *  "bcm4339", "iwl5300", "esp32", "sim", ... */
+    std::string source = "bcm4366c0";
+    /** Subcarrier indices k that carry a measurement, ascending; empty = the bandwidth's
+     *  standard data subcarriers (dataSubcarriers(bandwidth), all bins measured). */
+    std::vector<int16_t> subcarrierIndices;
+    /** Per receive antenna RSSI [dB] as the source reports it (Intel: rssi_a/b/c, relative to
+     *  the AGC); empty when not reported. */
+    std::vector<float> antennaRssi_dB;
+    /** Noise floor [dBm]; NaN when not reported. */
+    float noiseFloor_dBm = std::numeric_limits<float>::quiet_NaN();
+    /** Receiver AGC gain [dB]; NaN when not reported. */
+    float agc_dB = std::numeric_limits<float>::quiet_NaN();
+    /** Source-defined scaling of the raw CSI to physical units (scaledCsi() = factor · csi);
+     *  0 when the format defines none. */
+    double scaledCsiFactor = 0.0;
     /** @} */
 
     /** Sets the shape and zero-fills the CSI; clears presentMask. */
@@ -80,8 +107,14 @@ public:
     Complex& at(unsigned tx, unsigned rx, unsigned bin) { return pair(tx, rx)[bin]; }
     const Complex& at(unsigned tx, unsigned rx, unsigned bin) const { return pair(tx, rx)[bin]; }
 
-    /** Data subcarrier indices k for this bandwidth (234 / 108 / 52). */
-    const std::vector<int>& dataSubcarriers() const;
+    /** Subcarrier indices k that carry a measurement: subcarrierIndices if the source gave
+     *  them, otherwise the bandwidth's data subcarriers (234 / 108 / 52). */
+    std::vector<int> dataSubcarriers() const;
+    /** The CSI in the source's physical units (scaledCsiFactor · csi); empty if the format
+     *  defines no scaling. */
+    std::vector<Complex> scaledCsi() const;
+    /** Whether the source reported the subcarriers explicitly (grouped / sparse). */
+    bool hasExplicitSubcarriers() const { return !subcarrierIndices.empty(); }
     /** CSI of one pair on the data subcarriers, in the order of dataSubcarriers(). */
     std::vector<Complex> dataSubcarrierCsi(unsigned tx, unsigned rx) const;
     /** Frequencies [Hz] of the data subcarriers. */

@@ -106,6 +106,7 @@ private:
         uint8_t expectedCores = 0;
         mrpt::Clock::time_point firstArrival;
         uint16_t lastEmittedSequence = 0;
+        uint64_t lastEmittedMask = 0;  //!< pairs of the last emitted frame
         bool hasEmitted = false;
         uint8_t streamsSeen = 0;  //!< learnt: every stream this transmitter sent
         /** Whether streamsSeen can be trusted to say when a frame is complete: the header says

@@ -8,12 +8,36 @@
 #include <cstdint>
 #include <vector>
 
-/** The Nexmon CSI UDP datagram format of the BCM4366c0 (RT-AC86U), DESIGN.md §4. */
+/** The Nexmon CSI UDP datagram format (DESIGN.md §4) of the four chips nexmon_csi supports:
+ * BCM4366c0 (RT-AC86U), BCM43455c0 (Raspberry Pi 3B+/4/400), BCM4358 (Nexus 6P), BCM4339
+ * (Nexus 5). They share the 18-byte header; they differ in the chip word, where the core and
+ * stream sit in the csiconf word, and in how a CSI word encodes a complex value. */
 namespace mrpt_wifi::nexmon
 {
 constexpr size_t kHeaderBytes = 18;             //!< header size, identical in all three variants
 constexpr size_t kUbiLocateTrailerBytes = 128;  //!< firmware metadata after UbiLocate CSI
 constexpr uint16_t kChip4366c0 = 0x006a;
+constexpr uint16_t kChip43455c0 = 0x0065;
+constexpr uint16_t kChip4358 = 0x0003;
+/** The chip word of the BCM4358 in nexmon_csi's own example capture (utils/matlab/example.pcap). */
+constexpr uint16_t kChip4358Example = 0xdead;
+constexpr uint16_t kChip4339 = 0x0001;
+
+/** A chip nexmon_csi runs on. */
+enum class Chip : uint8_t
+{
+    BCM4366c0 = 0,  //!< packed float: 12-bit sign+mantissa I and Q, 6-bit shared exponent; 4x4
+    BCM43455c0,     //!< int16 I and Q; 1 core (Raspberry Pi 3B+/4/400)
+    BCM4358,        //!< packed float: 9-bit sign+mantissa I and Q, 5-bit exponent; 2 cores
+    BCM4339         //!< int16 I and Q; 1 core
+};
+const char* toString(Chip c);
+/** Chip of a header's chip word; false for an unknown word. */
+bool chipFromWord(uint16_t word, Chip& out);
+/** Receive cores the chip has. */
+unsigned chipCores(Chip c);
+/** Bandwidths [MHz] nexmon_csi supports on the chip (20/40/80 on all four). */
+bool chipSupportsBandwidth(Chip c, unsigned bandwidthMHz);
 constexpr uint16_t kDefaultUdpPort = 5500;
 constexpr unsigned kMaxCores = 4;    //!< receive chains of the 4366c0
 constexpr unsigned kMaxStreams = 4;  //!< spatial streams the 4366c0 reports
@@ -23,7 +47,7 @@ enum class RejectReason : uint8_t
 {
     TooShort = 0,   //!< shorter than the 18-byte header
     BadMagic,       //!< not 0x1111 / 0x11111111
-    UnknownChip,    //!< chip word not the 4366c0's
+    UnknownChip,    //!< chip word none of the four nexmon_csi chips
     BadChanspec,    //!< bandwidth/band/channel impossible
     SizeMismatch,   //!< length doesn't match the bandwidth's NFFT
     BadCoreStream,  //!< core or stream outside the chip / configured masks
@@ -54,7 +78,8 @@ struct DatagramHeader
     uint8_t core = 0;
     uint8_t stream = 0;
     Chanspec chanspec;
-    uint16_t chipId = 0;           //!< 0x006a for Nexmon / legacy; 0 for UbiLocate
+    uint16_t chipId = 0;           //!< chip word for Nexmon / legacy; 0 for UbiLocate
+    Chip chip = Chip::BCM4366c0;   //!< from the chip word (UbiLocate: the 4366c0)
     uint16_t firmwareCounter = 0;  //!< UbiLocate only
     uint8_t coreMask = 0;          //!< UbiLocate only: cores the frame has (0 = not said)
     uint8_t streamMask = 0;        //!< UbiLocate only: streams the frame has (0 = not said)
@@ -79,12 +104,17 @@ size_t datagramSize(NexmonHeaderVariant v, unsigned nfft);
 
 /** One 4366c0 packed-float word → complex value (mantissa · 2^exponent). */
 std::complex<float> unpackWord(uint32_t w);
+/** One BCM4358 packed-float word (8-bit mantissas + signs, 5-bit exponent) → complex value. */
+std::complex<float> unpackWord4358(uint32_t w);
 /** Complex value → the nearest packed-float word (11-bit mantissas, shared 6-bit exponent). */
 uint32_t packWord(std::complex<float> v);
 
-/** Decodes `nfft` little-endian words (raw FFT order) into `out` in subcarrier order
+/** Decodes `nfft` little-endian 4366c0 words (raw FFT order) into `out` in subcarrier order
  * (fftshift: raw index i goes to bin (i + nfft/2) mod nfft). */
 void decodeWords(const uint8_t* words, unsigned nfft, std::complex<float>* out);
+/** As decodeWords() for any chip: int16 I/Q (4339, 43455c0: real in the low half-word),
+ * 4358 or 4366c0 packed floats. */
+void decodeWords(Chip chip, const uint8_t* words, unsigned nfft, std::complex<float>* out);
 
 /** Encodes one datagram from CSI in subcarrier order (nfft = h.nfft() values). `out` is
  * resized to datagramSize(h.variant, nfft); the UbiLocate trailer is zero. */

@@ -1,0 +1,162 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt_wifi/sensor/CsiDecoder.h>
+
+#include <algorithm>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+namespace mrpt_wifi
+{
+namespace
+{
+std::mutex& registryMutex()
+{
+    static std::mutex m;
+    return m;
+}
+constexpr size_t kProbeBytes = 4096;
+}  // namespace
+
+std::string CsiDecodeSummary::asString() const
+{
+    std::ostringstream o;
+    o << "format: " << format << ", records " << records;
+    if (skipped) o << " (" << skipped << " without CSI skipped)";
+    if (!details.empty()) o << "\n" << details;
+    for (const auto& n : notes) o << "\nnote: " << n;
+    o << "\nCSI frames: " << frames;
+    return o.str();
+}
+
+CsiDecodeError::CsiDecodeError(
+    const std::string& file, uint64_t at, const std::string& fmt, const std::string& what)
+    : std::runtime_error(
+          "'" + file + "' at byte " + std::to_string(at) + " (" + fmt + " format): " + what),
+      path(file),
+      offset(at),
+      format(fmt)
+{
+}
+
+CsiDecoderRegistry& CsiDecoderRegistry::instance()
+{
+    static CsiDecoderRegistry r;
+    return r;
+}
+
+void CsiDecoderRegistry::add(std::shared_ptr<const CsiDecoder> decoder)
+{
+    std::lock_guard<std::mutex> lock(registryMutex());
+    decoders_.push_back(std::move(decoder));
+    std::sort(
+        decoders_.begin(), decoders_.end(),
+        [](const auto& a, const auto& b) { return a->name() < b->name(); });
+}
+
+std::shared_ptr<const CsiDecoder> CsiDecoderRegistry::find(const std::string& name) const
+{
+    std::lock_guard<std::mutex> lock(registryMutex());
+    for (const auto& d : decoders_)
+        if (d->name() == name) return d;
+    return nullptr;
+}
+
+std::vector<std::shared_ptr<const CsiDecoder>> CsiDecoderRegistry::all() const
+{
+    std::lock_guard<std::mutex> lock(registryMutex());
+    return decoders_;
+}
+
+std::string CsiDecoderRegistry::names(const std::string& separator) const
+{
+    std::string s;
+    for (const auto& d : all()) s += (s.empty() ? "" : separator) + d->name();
+    return s;
+}
+
+std::shared_ptr<const CsiDecoder> CsiDecoderRegistry::detect(const std::string& path) const
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot open '" + path + "'");
+    std::vector<uint8_t> head(kProbeBytes);
+    in.read(reinterpret_cast<char*>(head.data()), std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+    if (head.size() < 4)
+        throw std::runtime_error("'" + path + "' is empty or shorter than 4 bytes");
+    std::shared_ptr<const CsiDecoder> best;
+    int bestScore = 0;
+    for (const auto& d : all())
+    {
+        const int score = d->probe(head.data(), head.size());
+        if (score > bestScore)
+        {
+            bestScore = score;
+            best = d;
+        }
+    }
+    if (!best)
+        throw std::runtime_error(
+            "'" + path + "' is in no CSI format this program reads (" + names(", ") +
+            "); give --format to force one");
+    return best;
+}
+
+std::shared_ptr<const CsiDecoder> decodeCsiFile(
+    const std::string& path, const std::string& format, const CsiDecodeOptions& options,
+    const CsiFrameSink& onFrame, const CsiProgress& onProgress, CsiDecodeSummary* summaryOut)
+{
+    auto& registry = CsiDecoderRegistry::instance();
+    std::shared_ptr<const CsiDecoder> decoder;
+    if (format.empty() || format == "auto")
+        decoder = registry.detect(path);
+    else if (!(decoder = registry.find(format)))
+        throw std::invalid_argument(
+            "unknown CSI format '" + format + "' (expected auto|" + registry.names() + ")");
+    CsiDecodeSummary local;
+    CsiDecodeSummary& summary = summaryOut ? *summaryOut : local;
+    summary = CsiDecodeSummary{};
+    summary.format = decoder->name();
+    decoder->decodeFile(path, options, onFrame, onProgress, summary);
+    return decoder;
+}
+
+std::string applyFormatOption(const std::string& value, CsiDecodeOptions& options)
+{
+    if (value == "auto" || value.empty()) return "auto";
+    if (value == "nexmon" || value == "nexmon-legacy" || value == "ubilocate")
+    {
+        options.assembler.format = nexmon::formatHintFromString(value);
+        return "nexmon";
+    }
+    if (!CsiDecoderRegistry::instance().find(value))
+        throw std::invalid_argument(
+            "unknown format '" + value + "' (expected " + formatOptionChoices() + ")");
+    return value;
+}
+
+std::string formatOptionChoices()
+{
+    return "auto|" + CsiDecoderRegistry::instance().names() + "|nexmon-legacy|ubilocate";
+}
+
+std::vector<uint8_t> readWholeFile(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot open '" + path + "'");
+    return std::vector<uint8_t>(
+        (std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void ProgressThrottle::update(uint64_t done, uint64_t total)
+{
+    if (!f_ || !total) return;
+    const double fraction = std::min(1.0, double(done) / double(total));
+    if (fraction - last_ >= 0.01 || fraction >= 1.0)
+    {
+        last_ = fraction;
+        f_(fraction);
+    }
+}
+
+}  // namespace mrpt_wifi
