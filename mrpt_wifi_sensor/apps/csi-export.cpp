@@ -7,9 +7,8 @@
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
-#include <cmath>
-
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>

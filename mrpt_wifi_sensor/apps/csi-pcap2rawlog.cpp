@@ -11,7 +11,6 @@
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
 #include <filesystem>
-
 #include <iostream>
 
 using namespace mrpt_wifi;

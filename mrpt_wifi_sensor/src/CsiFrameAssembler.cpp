@@ -197,8 +197,8 @@ bool CsiFrameAssembler::push(
         // same sequence number for every frame: a pair the last frame already had then starts
         // a new frame rather than being late.
         const uint64_t bit = uint64_t(1) << (h.stream * CObservationWiFiCSI::kMaxChains + h.core);
-        const bool repeatsSequence = h.chip != nexmon::Chip::BCM4366c0 && !p.obs && behind == 0 &&
-                                     (p.lastEmittedMask & bit);
+        const bool repeatsSequence =
+            h.chip != nexmon::Chip::BCM4366c0 && !p.obs && behind == 0 && (p.lastEmittedMask & bit);
         if (haveReference && behind < kLateWindow && !(p.obs && behind == 0) && !repeatsSequence)
         {
             ++stats_.lateDatagrams;

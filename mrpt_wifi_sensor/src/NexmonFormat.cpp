@@ -350,8 +350,8 @@ void decodeWords(Chip chip, const uint8_t* words, unsigned nfft, std::complex<fl
         const uint8_t* p = words + 4 * i;
         std::complex<float> v;
         if (chip == Chip::BCM4358)
-            v = unpackWord4358(uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 |
-                               uint32_t(p[3]) << 24);
+            v = unpackWord4358(
+                uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24);
         else
             v = {float(int16_t(readLE16(p))), float(int16_t(readLE16(p + 2)))};
         out[(i + half) & (nfft - 1)] = v;

@@ -217,7 +217,8 @@ public:
                 std::string why;
                 auto obs = CObservationWiFiCSI::Create();
                 if (!parseLine(line, l, why) || !toObservation(l, *obs, why))
-                    throw CsiDecodeError(path, pos, name(), "line " + std::to_string(lineNo) + ": " + why);
+                    throw CsiDecodeError(
+                        path, pos, name(), "line " + std::to_string(lineNo) + ": " + why);
                 obs->sensorLabel = options.assembler.sensorLabel;
                 obs->sensorPose = options.assembler.sensorPose;
                 obs->routerAddress = "file";

@@ -46,8 +46,8 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why)
         return false;
     }
     r = BfeeRecord{};
-    r.timestampLow = uint32_t(d[0]) | uint32_t(d[1]) << 8 | uint32_t(d[2]) << 16 |
-                     uint32_t(d[3]) << 24;
+    r.timestampLow =
+        uint32_t(d[0]) | uint32_t(d[1]) << 8 | uint32_t(d[2]) << 16 | uint32_t(d[3]) << 24;
     r.bfeeCount = uint16_t(d[4] | d[5] << 8);
     r.nRx = d[8];
     r.nTx = d[9];
@@ -83,18 +83,18 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why)
         const unsigned rem = index % 8;
         for (unsigned j = 0; j < nPairs; ++j)
         {
-            const auto re = int8_t(uint8_t((byteAt(index / 8) >> rem) |
-                                           (byteAt(index / 8 + 1) << (8 - rem))));
-            const auto im = int8_t(uint8_t((byteAt(index / 8 + 1) >> rem) |
-                                           (byteAt(index / 8 + 2) << (8 - rem))));
+            const auto re =
+                int8_t(uint8_t((byteAt(index / 8) >> rem) | (byteAt(index / 8 + 1) << (8 - rem))));
+            const auto im = int8_t(
+                uint8_t((byteAt(index / 8 + 1) >> rem) | (byteAt(index / 8 + 2) << (8 - rem))));
             // MATLAB array [Ntx, Nrx, 30], column-major: j = tx + Ntx · rx.
             const unsigned tx = j % r.nTx, rx = j / r.nTx;
             raw[(tx * r.nRx + rx) * kSubcarriers + s] = {float(re), float(im)};
             index += 16;
         }
     }
-    r.perm = {uint8_t(antennaSel & 3), uint8_t((antennaSel >> 2) & 3),
-              uint8_t((antennaSel >> 4) & 3)};
+    r.perm = {
+        uint8_t(antennaSel & 3), uint8_t((antennaSel >> 2) & 3), uint8_t((antennaSel >> 4) & 3)};
     // read_bf_file applies the permutation only when perm(1:Nrx) sums to 1+..+Nrx.
     unsigned sum = 0;
     for (unsigned i = 0; i < r.nRx; ++i) sum += r.perm[i] + 1u;
@@ -192,8 +192,7 @@ public:
         {
             const size_t fieldLen = size_t(bytes[pos] << 8 | bytes[pos + 1]);
             const uint8_t code = bytes[pos + 2];
-            if (fieldLen < 1)
-                throw CsiDecodeError(path, pos, name(), "record of length 0");
+            if (fieldLen < 1) throw CsiDecodeError(path, pos, name(), "record of length 0");
             if (pos + 2 + fieldLen > bytes.size())
                 throw CsiDecodeError(
                     path, pos, name(),

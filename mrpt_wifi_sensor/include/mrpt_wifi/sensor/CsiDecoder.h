@@ -27,11 +27,11 @@ struct CsiDecodeOptions
 /** What a decode went through. */
 struct CsiDecodeSummary
 {
-    std::string format;       //!< decoder name
-    uint64_t records = 0;     //!< records / datagrams / lines / objects read
-    uint64_t skipped = 0;     //!< records of the format that carry no CSI (skipped, counted)
-    uint64_t frames = 0;      //!< CSI frames delivered
-    std::string details;      //!< format-specific counters, one line each
+    std::string format;              //!< decoder name
+    uint64_t records = 0;            //!< records / datagrams / lines / objects read
+    uint64_t skipped = 0;            //!< records of the format that carry no CSI (skipped, counted)
+    uint64_t frames = 0;             //!< CSI frames delivered
+    std::string details;             //!< format-specific counters, one line each
     std::vector<std::string> notes;  //!< assumptions the decoder made (e.g. a channel)
     std::string asString() const;
 };
@@ -95,14 +95,14 @@ private:
 };
 
 /** Registers a decoder class at library load. */
-#define MRPT_WIFI_REGISTER_CSI_DECODER(ClassName)                                    \
-    namespace                                                                        \
-    {                                                                                \
-    const bool registered_##ClassName = []                                           \
-    {                                                                                \
+#define MRPT_WIFI_REGISTER_CSI_DECODER(ClassName)                                       \
+    namespace                                                                           \
+    {                                                                                   \
+    const bool registered_##ClassName = []                                              \
+    {                                                                                   \
         ::mrpt_wifi::CsiDecoderRegistry::instance().add(std::make_shared<ClassName>()); \
-        return true;                                                                 \
-    }();                                                                             \
+        return true;                                                                    \
+    }();                                                                                \
     }
 
 /** Decodes a file with the named decoder, or the detected one when `format` is empty or

@@ -31,8 +31,8 @@ struct Esp32Line
     unsigned channel = 0;
     int secondaryChannel = 0;
     uint64_t localTimestamp_us = 0;
-    unsigned len = 0;             //!< int8 values announced
-    std::vector<int8_t> values;   //!< the buffer, imag then real per subcarrier
+    unsigned len = 0;            //!< int8 values announced
+    std::vector<int8_t> values;  //!< the buffer, imag then real per subcarrier
 };
 
 /** True for a line that is a CSI record (starts with CSI_DATA). */
