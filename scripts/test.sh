@@ -2,7 +2,8 @@
 # Installs what is needed, builds, and runs every test:
 #   1. the GoogleTest suites and integration tests with Debian's MRPT apps (Release build);
 #   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer;
-#   3. the libFuzzer target (clang) on the Nexmon parser + frame assembler, for a bounded time.
+#   3. the libFuzzer targets (clang): the Nexmon parser + frame assembler and one per CSI file
+#      decoder (nexmon, intel5300, esp32), FUZZ_SECONDS split between them.
 # Ends with one line "summary: N passed, N failed". Exit code non-zero if anything failed.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -43,20 +44,31 @@ else
   echo "ASan build FAILED"; failed=$((failed + 1))
 fi
 
-echo "== [3/3] libFuzzer: Nexmon parser + frame assembler, ${FUZZ_SECONDS} s"
+# The fuzz time is split between the assembler and one target per file decoder, so the total
+# stays FUZZ_SECONDS.
+fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32"
+per_target=$(( FUZZ_SECONDS / 4 > 0 ? FUZZ_SECONDS / 4 : 1 ))
+echo "== [3/3] libFuzzer: Nexmon assembler + nexmon/intel5300/esp32 decoders, ${per_target} s each"
 if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
      -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
      -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" >/dev/null &&
-   cmake --build build-fuzz -j"$(nproc)" --target fuzz_nexmon_assembler fuzz_make_seeds; then
-  corpus=build-fuzz/corpus
-  rm -rf "$corpus"; mkdir -p "$corpus"
-  build-fuzz/bin/fuzz_make_seeds "$corpus"
-  if build-fuzz/bin/fuzz_nexmon_assembler -max_total_time="$FUZZ_SECONDS" -max_len=20000 \
-       -print_final_stats=1 "$corpus" >build-fuzz/fuzz.log 2>&1; then
-    tail -3 build-fuzz/fuzz.log; echo "fuzz: no crash in ${FUZZ_SECONDS} s"; passed=$((passed + 1))
-  else
-    tail -40 build-fuzz/fuzz.log; echo "fuzz: FAILED"; failed=$((failed + 1))
-  fi
+   cmake --build build-fuzz -j"$(nproc)" --target $fuzz_targets fuzz_make_seeds; then
+  for target in $fuzz_targets; do
+    corpus=build-fuzz/corpus-$target
+    rm -rf "$corpus"; mkdir -p "$corpus"
+    case $target in
+      fuzz_nexmon_assembler) build-fuzz/bin/fuzz_make_seeds "$corpus" ;;
+      fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ ;;
+      fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ ;;
+      fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ ;;
+    esac
+    if build-fuzz/bin/$target -max_total_time="$per_target" -max_len=20000 \
+         -print_final_stats=1 "$corpus" >build-fuzz/$target.log 2>&1; then
+      tail -3 build-fuzz/$target.log; echo "fuzz $target: no crash in ${per_target} s"; passed=$((passed + 1))
+    else
+      tail -40 build-fuzz/$target.log; echo "fuzz $target: FAILED"; failed=$((failed + 1))
+    fi
+  done
 else
   echo "fuzz build FAILED"; failed=$((failed + 1))
 fi

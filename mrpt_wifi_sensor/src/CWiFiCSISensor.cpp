@@ -74,6 +74,16 @@ void CWiFiCSISensor::initialize()
                     << receiver_->boundPort() << " (receive buffer "
                     << receiver_->receiveBufferBytes() / 1024 << " KiB)");
         }
+        else if (s.source == CsiSensorSettings::Source::Live)
+        {
+            CsiLiveSourceOptions lo;
+            lo.udpPort = s.udp.port;
+            lo.baud = s.serialBaud;
+            lo.sensorLabel = m_sensorLabel;
+            lo.sensorPose = s.assembler.sensorPose;
+            live_ = openLiveSource(s.liveSource, lo);
+            MRPT_LOG_INFO_STREAM("[" << m_sensorLabel << "] capturing from " << live_->describe());
+        }
         else
         {
             replay_ = std::make_unique<PcapReader>(s.pcapFile);
@@ -157,6 +167,12 @@ void CWiFiCSISensor::doProcess()
     }
     else if (replay_ && !replayFinished_)
         drainReplay();
+    else if (live_)
+        live_->poll(
+            [this](const uint8_t* d, size_t n, mrpt::Clock::time_point t, const std::string& src)
+            { onDatagram(d, n, t, src); },
+            [this](CObservationWiFiCSI::Ptr&& f) { onFrame(std::move(f)); },
+            std::chrono::milliseconds(0));
     if (!assembler_) return;
 
     const auto now = mrpt::Clock::now();

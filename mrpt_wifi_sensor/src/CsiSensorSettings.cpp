@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/bits_math.h>
 #include <mrpt/system/string_utils.h>
+#include <mrpt_wifi/sensor/CsiLiveSource.h>
 #include <mrpt_wifi/sensor/CsiSensorSettings.h>
 
 #include <algorithm>
@@ -36,7 +37,7 @@ const std::set<std::string>& knownKeys()
         "pose_x", "pose_y", "pose_z", "pose_yaw", "pose_pitch", "pose_roll",
         // data path
         "source", "udp_bind_address", "udp_port", "udp_receive_buffer", "pcap_file", "pcap_speed",
-        "router_address", "mac_filter", "min_rssi_dBm", "format", "overwritten_bins",
+        "serial_baud", "router_address", "mac_filter", "min_rssi_dBm", "format", "overwritten_bins",
         "frame_timeout", "core_mask", "stream_mask", "status_period", "abort_on_error",
         // control path: WiROS's 'login', 'channel', 'packet', 'setup' groups
         "router_control", "login_host", "login_port", "login_user", "login_identity_file",
@@ -116,8 +117,17 @@ CsiSensorSettings loadCsiSensorSettings(
             s.source = CsiSensorSettings::Source::Udp;
         else if (source == "pcap")
             s.source = CsiSensorSettings::Source::Pcap;
+        else if (isLiveSourceSpec(source))
+        {
+            s.source = CsiSensorSettings::Source::Live;
+            s.liveSource = source;
+        }
         else
-            throw std::invalid_argument("key 'source': '" + source + "' (expected udp or pcap)");
+            throw std::invalid_argument(
+                "key 'source': '" + source +
+                "' (expected udp, pcap, interface:IFACE or serial:DEVICE)");
+        s.serialBaud =
+            unsigned(parseUnsigned(str("serial_baud", "921600"), "serial_baud", 4000000));
         s.udp.bindAddress = str("udp_bind_address", "0.0.0.0");
         s.udp.port = uint16_t(parseUnsigned(str("udp_port", "5500"), "udp_port", 65535));
         s.udp.receiveBufferBytes = int(

@@ -87,6 +87,101 @@ uint64_t PcapReader::position() const
     return pos < 0 ? 0 : uint64_t(pos);
 }
 
+bool extractUdpDatagram(
+    int linkType, const uint8_t* packet, size_t caplen, uint16_t udpPort, PcapUdpDatagram& out,
+    PcapReader::Stats& stats)
+{
+    const uint8_t* p = packet;
+    size_t len = caplen;
+
+    // Link layer → the network protocol and where it starts.
+    uint16_t ethertype = 0;
+    switch (linkType)
+    {
+        case kLinkEthernet:
+            if (len < 14) break;
+            ethertype = readBE16(p + 12);
+            p += 14, len -= 14;
+            while ((ethertype == kEtherVlan || ethertype == kEtherQinQ) && len >= 4)
+            {
+                ethertype = readBE16(p + 2);
+                p += 4, len -= 4;
+            }
+            break;
+        case kLinkLinuxSll:
+            if (len < 16) break;
+            ethertype = readBE16(p + 14);
+            p += 16, len -= 16;
+            break;
+        case kLinkLinuxSll2:
+            if (len < 20) break;
+            ethertype = readBE16(p);
+            p += 20, len -= 20;
+            break;
+        default:  // raw IP: the version nibble says which
+            if (len >= 1) ethertype = (p[0] >> 4) == 6 ? kEtherIpv6 : kEtherIpv4;
+            break;
+    }
+
+    // Network layer → UDP header.
+    char address[INET6_ADDRSTRLEN] = {0};
+    if (ethertype == kEtherIpv4 && len >= 20 && (p[0] >> 4) == 4)
+    {
+        const size_t ihl = size_t(p[0] & 0x0F) * 4;
+        const bool fragment = (readBE16(p + 6) & 0x3FFF) != 0;
+        if (ihl < 20 || len < ihl)
+        {
+            ++stats.skippedTruncated;
+            return false;
+        }
+        if (p[9] != kProtoUdp || fragment)
+        {
+            ++stats.skippedNotUdp;
+            return false;
+        }
+        inet_ntop(AF_INET, p + 12, address, sizeof(address));
+        p += ihl, len -= ihl;
+    }
+    else if (ethertype == kEtherIpv6 && len >= 40 && (p[0] >> 4) == 6)
+    {
+        if (p[6] != kProtoUdp)
+        {
+            ++stats.skippedNotUdp;
+            return false;
+        }
+        inet_ntop(AF_INET6, p + 8, address, sizeof(address));
+        p += 40, len -= 40;
+    }
+    else
+    {
+        ++stats.skippedNotIp;
+        return false;
+    }
+    if (len < 8)
+    {
+        ++stats.skippedTruncated;
+        return false;
+    }
+    const uint16_t udpLength = readBE16(p + 4);
+    if (udpLength < 8 || udpLength > len)
+    {
+        ++stats.skippedTruncated;
+        return false;
+    }
+    out.sourcePort = readBE16(p);
+    out.destinationPort = readBE16(p + 2);
+    if (udpPort && out.destinationPort != udpPort)
+    {
+        ++stats.skippedOtherPort;
+        return false;
+    }
+    out.payload = p + 8;
+    out.payloadLength = udpLength - 8u;
+    out.sourceAddress = address;
+    out.sourceAddress = address;
+    return true;
+}
+
 bool PcapReader::next(PcapUdpDatagram& out)
 {
     for (;;)
@@ -101,93 +196,7 @@ bool PcapReader::next(PcapUdpDatagram& out)
                 path_, recordOffset,
                 std::string("corrupt or truncated record: ") + pcap_geterr(impl_->handle));
         ++stats_.packets;
-        const uint8_t* p = pkt;
-        size_t len = hdr->caplen;
-
-        // Link layer → the network protocol and where it starts.
-        uint16_t ethertype = 0;
-        switch (impl_->linkType)
-        {
-            case kLinkEthernet:
-                if (len < 14) break;
-                ethertype = readBE16(p + 12);
-                p += 14, len -= 14;
-                while ((ethertype == kEtherVlan || ethertype == kEtherQinQ) && len >= 4)
-                {
-                    ethertype = readBE16(p + 2);
-                    p += 4, len -= 4;
-                }
-                break;
-            case kLinkLinuxSll:
-                if (len < 16) break;
-                ethertype = readBE16(p + 14);
-                p += 16, len -= 16;
-                break;
-            case kLinkLinuxSll2:
-                if (len < 20) break;
-                ethertype = readBE16(p);
-                p += 20, len -= 20;
-                break;
-            default:  // raw IP: the version nibble says which
-                if (len >= 1) ethertype = (p[0] >> 4) == 6 ? kEtherIpv6 : kEtherIpv4;
-                break;
-        }
-
-        // Network layer → UDP header.
-        char address[INET6_ADDRSTRLEN] = {0};
-        if (ethertype == kEtherIpv4 && len >= 20 && (p[0] >> 4) == 4)
-        {
-            const size_t ihl = size_t(p[0] & 0x0F) * 4;
-            const bool fragment = (readBE16(p + 6) & 0x3FFF) != 0;
-            if (ihl < 20 || len < ihl)
-            {
-                ++stats_.skippedTruncated;
-                continue;
-            }
-            if (p[9] != kProtoUdp || fragment)
-            {
-                ++stats_.skippedNotUdp;
-                continue;
-            }
-            inet_ntop(AF_INET, p + 12, address, sizeof(address));
-            p += ihl, len -= ihl;
-        }
-        else if (ethertype == kEtherIpv6 && len >= 40 && (p[0] >> 4) == 6)
-        {
-            if (p[6] != kProtoUdp)
-            {
-                ++stats_.skippedNotUdp;
-                continue;
-            }
-            inet_ntop(AF_INET6, p + 8, address, sizeof(address));
-            p += 40, len -= 40;
-        }
-        else
-        {
-            ++stats_.skippedNotIp;
-            continue;
-        }
-        if (len < 8)
-        {
-            ++stats_.skippedTruncated;
-            continue;
-        }
-        const uint16_t udpLength = readBE16(p + 4);
-        if (udpLength < 8 || udpLength > len)
-        {
-            ++stats_.skippedTruncated;
-            continue;
-        }
-        out.sourcePort = readBE16(p);
-        out.destinationPort = readBE16(p + 2);
-        if (udpPort_ && out.destinationPort != udpPort_)
-        {
-            ++stats_.skippedOtherPort;
-            continue;
-        }
-        out.payload = p + 8;
-        out.payloadLength = udpLength - 8u;
-        out.sourceAddress = address;
+        if (!extractUdpDatagram(impl_->linkType, pkt, hdr->caplen, udpPort_, out, stats_)) continue;
         out.fileOffset = recordOffset;
         // Opened with nanosecond precision: tv_usec holds nanoseconds.
         out.timestamp = mrpt::Clock::fromDouble(double(hdr->ts.tv_sec)) +

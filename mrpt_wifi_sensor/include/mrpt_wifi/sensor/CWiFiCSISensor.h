@@ -5,6 +5,7 @@
 #include <mrpt/system/COutputLogger.h>
 #include <mrpt_wifi/sensor/AccessPointSelector.h>
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/CsiLiveSource.h>
 #include <mrpt_wifi/sensor/CsiSensorSettings.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 
@@ -81,6 +82,7 @@ private:
     // Data path
     std::unique_ptr<UdpCsiReceiver> receiver_;
     std::unique_ptr<PcapReader> replay_;
+    std::unique_ptr<CsiLiveSource> live_;  //!< source = interface:IFACE / serial:DEVICE
     std::unique_ptr<CsiFrameAssembler> assembler_;
     mrpt::Clock::time_point replayStartWall_, replayStartCapture_;
     bool replayHasPending_ = false;

@@ -19,12 +19,15 @@ struct CsiSensorSettings
     enum class Source
     {
         Udp,
-        Pcap
+        Pcap,
+        Live  //!< `interface:IFACE` or `serial:DEVICE` (CsiLiveSource)
     };
     Source source = Source::Udp;
     UdpCsiReceiverOptions udp;
     std::string pcapFile;
     double pcapSpeed = 1.0;
+    std::string liveSource;        //!< the `source` value of a live source
+    unsigned serialBaud = 921600;  //!< `serial_baud`
     std::string routerAddress;
     std::vector<MacPattern> macFilter;
     int minRssi_dBm = -128;

@@ -65,6 +65,14 @@ private:
     Stats stats_;
 };
 
+/** Finds the UDP datagram to `udpPort` (0: any) in one captured packet of libpcap link type
+ * `linkType` (DLT_EN10MB, DLT_LINUX_SLL, DLT_LINUX_SLL2, raw IP): fills payload, length,
+ * ports and source address of `out`; false (the reason counted in `stats`) otherwise. Shared
+ * by PcapReader and live capture. */
+bool extractUdpDatagram(
+    int linkType, const uint8_t* packet, size_t caplen, uint16_t udpPort, PcapUdpDatagram& out,
+    PcapReader::Stats& stats);
+
 /** Writes Nexmon datagrams as a tcpdump would record them on the router (Ethernet, IPv4,
  * UDP 5500 → 5500 from 10.10.10.10 to 255.255.255.255, checksum 0): classic pcap with
  * microsecond timestamps. This only writes a file; nothing is sent. */
