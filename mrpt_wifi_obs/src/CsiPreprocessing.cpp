@@ -26,6 +26,8 @@ const char* toString(RejectReason r)
             return "no calibration for the channel";
         case RejectReason::UnsupportedChannel:
             return "unsupported bandwidth";
+        case RejectReason::SingleAntenna:
+            return "one receive antenna: no angle of arrival (CSI still recorded)";
     }
     return "?";
 }
@@ -204,6 +206,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
 {
     if (in.rssi_dBm != 0 && in.rssi_dBm < options_.minRssi_dBm) return RejectReason::LowRssi;
     if (in.nRx > rxArray_.size()) return RejectReason::ArrayMismatch;
+    if (in.nRx < 2) return RejectReason::SingleAntenna;
     const unsigned nRx = in.nRx;
     const unsigned nfft = in.nfft();
     if (in.chanspec.bandwidthMHz != 20 && in.chanspec.bandwidthMHz != 40 &&

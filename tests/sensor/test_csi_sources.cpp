@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/Esp32CsiFormat.h>
@@ -475,6 +477,25 @@ TEST(CsiObservationV1, NewFieldsRoundTripThroughARawlog)
     size_t columns = 0;
     for (std::string c; row >> c;) ++columns;
     EXPECT_EQ(columns, 9u + 2u * 3u * 30u);
+}
+
+// --------------------------------------------------------------------------- bearings
+TEST(CsiSourceBearings, OneAntennaGivesNoAngleSaidClearlyMultiAntennaIsProcessed)
+{
+    const auto array =
+        AntennaArray::fromYamlFile(test::sourceDir() + "/share/arrays/ap-linear-4.yaml");
+    CsiPreprocessor pre(PreprocessOptions{}, array);
+    CleanCsi clean;
+    const auto esp = decodeAll(data("esp32/csi_data.csv"));
+    ASSERT_FALSE(esp.empty());
+    const auto why = pre.process(*esp[0], clean);
+    EXPECT_EQ(why, RejectReason::SingleAntenna);
+    EXPECT_NE(std::string(toString(why)).find("no angle of arrival"), std::string::npos);
+    // The Intel 5300's 3 antennas on a given array are processed.
+    const auto intel = decodeAll(data("intel5300/log.all_csi.6.7.6.dat"));
+    ASSERT_FALSE(intel.empty());
+    EXPECT_EQ(pre.process(*intel[0], clean), RejectReason::Accepted);
+    EXPECT_EQ(clean.nRx, 3u);
 }
 
 // --------------------------------------------------------------------------- CLIs

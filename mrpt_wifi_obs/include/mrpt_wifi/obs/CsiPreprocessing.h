@@ -59,14 +59,15 @@ enum class RejectReason : uint8_t
 {
     Accepted = 0,
     LowRssi,
-    NoCompleteStream,   //!< no transmit stream arrived on all receive antennas
-    ArrayMismatch,      //!< the CSI has more receive chains than the array has elements
-    DeadAntenna,        //!< an antenna reported (almost) nothing in every stream
-    NoCalibration,      //!< requireCalibration and none for this channel
-    UnsupportedChannel  //!< bandwidth without a data-subcarrier plan
+    NoCompleteStream,    //!< no transmit stream arrived on all receive antennas
+    ArrayMismatch,       //!< the CSI has more receive chains than the array has elements
+    DeadAntenna,         //!< an antenna reported (almost) nothing in every stream
+    NoCalibration,       //!< requireCalibration and none for this channel
+    UnsupportedChannel,  //!< bandwidth without a data-subcarrier plan
+    SingleAntenna        //!< one receive antenna (e.g. an ESP32): no angle of arrival
 };
 const char* toString(RejectReason r);
-constexpr size_t kRejectReasonCount = 7;
+constexpr size_t kRejectReasonCount = 8;
 
 /** One CSI frame after preprocessing: the complete streams only, on the layout's subcarriers,
  *  sign-corrected, calibrated, without sampling-time offset, power-normalised. */
