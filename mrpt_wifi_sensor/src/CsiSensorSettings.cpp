@@ -160,6 +160,7 @@ CsiSensorSettings loadCsiSensorSettings(
         s.setup.interface5G = str("setup_interface_5g", s.setup.interface5G);
         s.setup.interface2G4 = str("setup_interface_2g4", s.setup.interface2G4);
         s.setup.scanWait_s = c.read_double(section, "scan_wait", 3.0);
+        s.setup.validate();
         s.extraction.chanspec = Chanspec::fromString(str("channel", "157/80"));
         s.extraction.coreMask = s.assembler.coreMask;
         s.extraction.streamMask = s.assembler.streamMask;
