@@ -259,6 +259,7 @@ void CWiFiCSISensor::startBearings()
     if (s.routerControl) channel = s.extraction.chanspec;
     bearings_ =
         std::make_unique<LiveBearingWorker>(std::move(bearingProcessor_), s.bearing, channel);
+    bearingStatusTime_ = mrpt::Clock::now();
     MRPT_LOG_INFO_STREAM(
         "[" << m_sensorLabel << "] live bearings: " << s.bearing.algorithm << " (queue "
             << s.bearing.queueLength << " frames), observations " << m_sensorLabel << "_AOA");
@@ -280,9 +281,12 @@ void CWiFiCSISensor::deliverBearings()
     for (auto& o : ready) appendObservation(o);
 }
 
-std::string CWiFiCSISensor::bearingStatus(double period_s)
+std::string CWiFiCSISensor::bearingStatus()
 {
     if (!bearings_) return {};
+    const auto now = mrpt::Clock::now();
+    const double period_s = secondsBetween(bearingStatusTime_, now);
+    bearingStatusTime_ = now;
     const auto st = bearings_->stats();
     const auto lat = bearings_->takeLatency();
     char buf[256];
@@ -502,7 +506,7 @@ void CWiFiCSISensor::logStatus()
     if (c.scans) o << " | scans " << c.scans << ", switches " << c.channelSwitches;
     if (const auto d = lastSwitchDowntime())
         o << " | last switch downtime " << int(*d * 1000) << " ms";
-    o << bearingStatus(settings_->statusPeriod_s);
+    o << bearingStatus();
     if (!lastError().empty()) o << " | last error: " << lastError();
     MRPT_LOG_INFO(o.str());
 }

@@ -66,11 +66,20 @@ std::unique_ptr<bearing::BearingProcessor> makeLiveBearingProcessor(const LiveBe
 {
     if (!s.enabled()) throw std::logic_error("makeLiveBearingProcessor: bearing_algorithm is off");
     // The same steps, in the same order, as csi-bearings.
+    // `bearing_options`: a csi-bearings --config file, or inline estimator options `{k: v}`.
+    const bool inlineOptions = !s.optionsFile.empty() && s.optionsFile.front() == '{';
     const auto cfg = forKey(
         "bearing_options",
-        [&] { return bearing::loadBearingChainConfig(s.optionsFile, s.algorithm); });
+        [&]
+        {
+            return bearing::loadBearingChainConfig(
+                inlineOptions ? std::string() : s.optionsFile, s.algorithm);
+        });
     mrpt::containers::yaml params = mrpt::containers::yaml::Map();
     if (!cfg.estimatorParams.isNullNode()) params = cfg.estimatorParams;
+    if (inlineOptions)
+        params = forKey(
+            "bearing_options", [&] { return mrpt::containers::yaml::FromText(s.optionsFile); });
     auto estimator =
         forKey("bearing_algorithm", [&] { return bearing::createEstimator(s.algorithm, params); });
     const std::string arrayPath = s.arrayFile.empty() ? defaultArrayFile() : s.arrayFile;

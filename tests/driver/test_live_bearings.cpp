@@ -238,6 +238,10 @@ TEST(LiveBearingWorker, ConfigurationErrorsNameTheKey)
     e = configError("bearing_algorithm = fft\nbearing_options = " + tmp.file("bad.yaml") + "\n");
     EXPECT_NE(e.find("key 'bearing_options'"), std::string::npos) << e;
 
+    e = configError("bearing_algorithm = fft\nbearing_options = {no_such_option: 1}\n");
+    EXPECT_NE(e.find("no_such_option"), std::string::npos) << e;
+    EXPECT_EQ(configError("bearing_algorithm = fft\nbearing_options = {angle_bins: 90}\n"), "");
+
     std::ofstream(tmp.file("ok.yaml")) << "window:\n  stride: 2\nestimators:\n  fft:\n"
                                           "    angle_bins: 90\n";
     EXPECT_EQ(

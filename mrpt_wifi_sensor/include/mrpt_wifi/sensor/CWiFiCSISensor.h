@@ -129,9 +129,10 @@ private:
     std::unique_ptr<bearing::BearingProcessor> bearingProcessor_;  //!< built by loadConfig
     std::unique_ptr<LiveBearingWorker> bearings_;
     uint64_t bearingsAtLastStatus_ = 0, skippedAtLastStatus_ = 0;
+    mrpt::Clock::time_point bearingStatusTime_;
     void startBearings();
     void deliverBearings();
-    std::string bearingStatus(double period_s);
+    std::string bearingStatus();
 
     Counters counters_;
     std::string lastError_;

@@ -24,7 +24,9 @@ struct LiveBearingSettings
     std::string algorithm;    //!< bearing_algorithm: a csi-bearings estimator name; empty = off
     std::string calibration;  //!< bearing_calibration: a file or a folder (as --calib)
     std::string arrayFile;    //!< bearing_array: empty = share/arrays/rt-ac86u.yaml
-    std::string optionsFile;  //!< bearing_options: YAML as csi-bearings --config
+    /** bearing_options: a YAML file as csi-bearings --config, or inline options of the
+     *  estimator, `{angle_bins: 90, window: 4}` (as csi-bearings --param). */
+    std::string optionsFile;
     std::vector<std::string> txArrays;  //!< bearing_tx_arrays: `[MAC=]FILE`, as --tx-array
     size_t queueLength = 64;            //!< bearing_queue_length: frames waiting, at most
     /** bearing_calibration_max_age_days: an older calibration is reported as stale (the
