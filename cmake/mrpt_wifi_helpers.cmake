@@ -34,7 +34,7 @@ endfunction()
 function(mrpt_wifi_add_gtest name)
     cmake_parse_arguments(ARG "" "" "SOURCES;LINK;LABELS" ${ARGN})
     add_executable(${name} ${ARG_SOURCES})
-    target_link_libraries(${name} PRIVATE ${ARG_LINK} GTest::gtest GTest::gtest_main)
+    target_link_libraries(${name} PRIVATE ${ARG_LINK} mrpt_wifi_test_support GTest::gtest GTest::gtest_main)
     target_compile_definitions(${name} PRIVATE
         MRPT_WIFI_SHARED_DIR="${MRPT_WIFI_SHARED_DIR}"
         MRPT_WIFI_SOURCE_DIR="${PROJECT_SOURCE_DIR}"

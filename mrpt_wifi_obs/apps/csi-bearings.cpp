@@ -14,6 +14,7 @@
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/RawlogReader.h>
+#include <mrpt_wifi/obs/bearing/BearingChainConfig.h>
 #include <mrpt_wifi/obs/bearing/BearingImages.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
@@ -47,66 +48,10 @@ double median(std::vector<double> v)
 }
 
 /** Options file: {preprocess: {...}, window: {...}, estimators: {NAME: {...}}}. */
-struct ConfigFile
-{
-    PreprocessOptions pre;
-    bearing::BearingProcessor::Options window;
-    mrpt::containers::yaml estimatorParams;
-};
-
+using ConfigFile = bearing::BearingChainConfig;
 ConfigFile loadConfig(const std::string& path, const std::string& algo)
 {
-    ConfigFile c;
-    if (path.empty()) return c;
-    const auto doc = mrpt::containers::yaml::FromFile(path);
-    const auto bad = [&](const std::string& what)
-    { throw std::invalid_argument("config '" + path + "': " + what); };
-    for (const auto& kv : doc.asMap())
-    {
-        const std::string k = kv.first.as<std::string>();
-        if (k != "preprocess" && k != "window" && k != "estimators")
-            bad("unknown section '" + k + "' (expected preprocess, window, estimators)");
-    }
-    if (doc.has("preprocess"))
-        for (const auto& kv : doc["preprocess"].asMap())
-        {
-            const std::string k = kv.first.as<std::string>();
-            const auto& v = kv.second;
-            if (k == "correct_subband_sign_80")
-                c.pre.correctSubbandSign80 = v.as<bool>();
-            else if (k == "correct_subband_sign_40")
-                c.pre.correctSubbandSign40 = v.as<bool>();
-            else if (k == "exclude_firmware_overwritten")
-                c.pre.excludeFirmwareOverwritten = v.as<bool>();
-            else if (k == "remove_sampling_time_offset")
-                c.pre.removeSamplingTimeOffset = v.as<bool>();
-            else if (k == "normalize_power")
-                c.pre.normalizePower = v.as<bool>();
-            else if (k == "min_rssi_dbm")
-                c.pre.minRssi_dBm = v.as<double>();
-            else if (k == "require_calibration")
-                c.pre.requireCalibration = v.as<bool>();
-            else if (k == "max_streams")
-                c.pre.maxStreams = v.as<unsigned>();
-            else
-                bad("unknown preprocess option '" + k + "'");
-        }
-    if (doc.has("window"))
-        for (const auto& kv : doc["window"].asMap())
-        {
-            const std::string k = kv.first.as<std::string>();
-            if (k == "capacity")
-                c.window.windowCapacity = kv.second.as<size_t>();
-            else if (k == "max_age_s")
-                c.window.windowMaxAge_s = kv.second.as<double>();
-            else if (k == "stride")
-                c.window.stride = std::max(1u, kv.second.as<unsigned>());
-            else
-                bad("unknown window option '" + k + "'");
-        }
-    if (doc.has("estimators") && doc["estimators"].has(algo))
-        c.estimatorParams = doc["estimators"][algo];
-    return c;
+    return bearing::loadBearingChainConfig(path, algo);
 }
 
 struct TransmitterStats

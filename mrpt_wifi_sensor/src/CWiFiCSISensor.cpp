@@ -3,6 +3,7 @@
 #include <mrpt/core/bits_math.h>
 #include <mrpt/system/string_utils.h>
 #include <mrpt_wifi/sensor/CWiFiCSISensor.h>
+#include <mrpt_wifi/sensor/LiveBearingWorker.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sensor/UdpCsiReceiver.h>
 
@@ -31,6 +32,7 @@ CWiFiCSISensor::CWiFiCSISensor()
 
 CWiFiCSISensor::~CWiFiCSISensor()
 {
+    bearings_.reset();
     {
         std::lock_guard<std::mutex> lk(mutex_);
         stopWorker_ = true;
@@ -55,6 +57,18 @@ void CWiFiCSISensor::loadConfig_sensorSpecific(
     const mrpt::config::CConfigFileBase& c, const std::string& section)
 {
     *settings_ = loadCsiSensorSettings(c, section, m_sensorLabel);
+    bearingProcessor_.reset();
+    if (settings_->bearing.enabled())
+    {
+        try
+        {
+            bearingProcessor_ = makeLiveBearingProcessor(settings_->bearing);
+        }
+        catch (const std::exception& e)
+        {
+            throw std::invalid_argument("section '" + section + "': " + e.what());
+        }
+    }
 }
 
 void CWiFiCSISensor::initialize()
@@ -64,6 +78,7 @@ void CWiFiCSISensor::initialize()
     assembler_ = std::make_unique<CsiFrameAssembler>(
         s.assembler, [this](CObservationWiFiCSI::Ptr&& f) { onFrame(std::move(f)); });
     lastStatus_ = lastScan_ = mrpt::Clock::now();
+    startBearings();
     try
     {
         if (s.source == CsiSensorSettings::Source::Udp)
@@ -177,6 +192,7 @@ void CWiFiCSISensor::doProcess()
 
     const auto now = mrpt::Clock::now();
     assembler_->flushExpired(now);
+    deliverBearings();
     {
         std::lock_guard<std::mutex> lk(mutex_);
         counters_.assembler = assembler_->stats();
@@ -244,7 +260,66 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
         MRPT_LOG_INFO_FMT(
             "[%s] first frame on %s %.0f ms after the switch request", m_sensorLabel.c_str(),
             frame->chanspec.asString().c_str(), *measured * 1e3);
-    appendObservation(frame);
+    if (bearings_)
+        bearings_->submit(std::move(frame));  // comes back with its bearing: deliverBearings()
+    else
+        appendObservation(frame);
+}
+
+void CWiFiCSISensor::startBearings()
+{
+    if (!bearingProcessor_) return;
+    const auto& s = *settings_;
+    // With router control the channel is known now: check its calibration before any frame.
+    std::optional<Chanspec> channel;
+    if (s.routerControl) channel = s.extraction.chanspec;
+    bearings_ =
+        std::make_unique<LiveBearingWorker>(std::move(bearingProcessor_), s.bearing, channel);
+    bearingStatusTime_ = mrpt::Clock::now();
+    MRPT_LOG_INFO_STREAM(
+        "[" << m_sensorLabel << "] live bearings: " << s.bearing.algorithm << " (queue "
+            << s.bearing.queueLength << " frames), observations " << m_sensorLabel << "_AOA");
+    deliverBearings();  // the start-up calibration report
+}
+
+void CWiFiCSISensor::deliverBearings()
+{
+    if (!bearings_) return;
+    for (const auto& m : bearings_->takeMessages())
+    {
+        if (m.problem)
+            MRPT_LOG_WARN_STREAM("[" << m_sensorLabel << "] bearings: " << m.text);
+        else
+            MRPT_LOG_INFO_STREAM("[" << m_sensorLabel << "] bearings: " << m.text);
+    }
+    std::vector<mrpt::obs::CObservation::Ptr> ready;
+    bearings_->takeReady(ready);
+    for (auto& o : ready) appendObservation(o);
+}
+
+std::string CWiFiCSISensor::bearingStatus()
+{
+    if (!bearings_) return {};
+    const auto now = mrpt::Clock::now();
+    const double period_s = secondsBetween(bearingStatusTime_, now);
+    bearingStatusTime_ = now;
+    const auto st = bearings_->stats();
+    const auto lat = bearings_->takeLatency();
+    char buf[256];
+    std::snprintf(
+        buf, sizeof(buf),
+        " | bearings %.1f/s (%llu total), skipped %llu (+%llu), rejected %llu, latency p50 %.1f ms "
+        "p99 %.1f ms",
+        period_s > 0 ? double(st.bearings - bearingsAtLastStatus_) / period_s : 0.0,
+        static_cast<unsigned long long>(st.bearings), static_cast<unsigned long long>(st.skipped),
+        static_cast<unsigned long long>(st.skipped - skippedAtLastStatus_),
+        static_cast<unsigned long long>(st.rejected), lat.p50_s * 1e3, lat.p99_s * 1e3);
+    bearingsAtLastStatus_ = st.bearings;
+    skippedAtLastStatus_ = st.skipped;
+    std::string out = buf;
+    if (st.calibrationErrors)
+        out += ", calibration mismatches " + std::to_string(st.calibrationErrors);
+    return out;
 }
 
 void CWiFiCSISensor::drainReplay()
@@ -447,6 +522,7 @@ void CWiFiCSISensor::logStatus()
     if (c.scans) o << " | scans " << c.scans << ", switches " << c.channelSwitches;
     if (const auto d = lastSwitchDowntime())
         o << " | last switch downtime " << int(*d * 1000) << " ms";
+    o << bearingStatus();
     if (!lastError().empty()) o << " | last error: " << lastError();
     MRPT_LOG_INFO(o.str());
 }

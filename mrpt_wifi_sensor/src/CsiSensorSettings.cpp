@@ -51,7 +51,10 @@ const std::set<std::string>& knownKeys()
         // scanning and automatic channel
         "scan_period", "scan_wait", "scanner", "scan_interface", "auto_channel",
         "auto_min_rssi_gain_dB", "auto_min_dwell_s", "auto_min_rssi_dBm", "auto_ssid",
-        "auto_mac_filter"};
+        "auto_mac_filter",
+        // bearings computed live (LiveBearingWorker)
+        "bearing_algorithm", "bearing_calibration", "bearing_array", "bearing_options",
+        "bearing_tx_arrays", "bearing_queue_length", "bearing_calibration_max_age_days"};
     return keys;
 }
 
@@ -170,6 +173,7 @@ CsiSensorSettings loadCsiSensorSettings(
         s.setup.interface5G = str("setup_interface_5g", s.setup.interface5G);
         s.setup.interface2G4 = str("setup_interface_2g4", s.setup.interface2G4);
         s.setup.scanWait_s = c.read_double(section, "scan_wait", 3.0);
+        s.setup.validate();
         s.extraction.chanspec = Chanspec::fromString(str("channel", "157/80"));
         s.extraction.coreMask = s.assembler.coreMask;
         s.extraction.streamMask = s.assembler.streamMask;
@@ -211,6 +215,23 @@ CsiSensorSettings loadCsiSensorSettings(
             throw std::invalid_argument(
                 "auto_channel, transmitter_mode and router-side scans (scan_period with scanner = "
                 "router) need router_control = true");
+        auto& b = s.bearing;
+        b.algorithm = str("bearing_algorithm", "");
+        b.calibration = str("bearing_calibration", "");
+        b.arrayFile = str("bearing_array", "");
+        b.optionsFile = str("bearing_options", "");
+        b.txArrays = splitList(str("bearing_tx_arrays", ""));
+        b.queueLength =
+            parseUnsigned(str("bearing_queue_length", "64"), "bearing_queue_length", 100000);
+        if (b.queueLength == 0)
+            throw std::invalid_argument("key 'bearing_queue_length' must be at least 1");
+        b.calibrationMaxAge_days = c.read_double(section, "bearing_calibration_max_age_days", 7.0);
+        if (!b.enabled())
+            for (const char* k :
+                 {"bearing_calibration", "bearing_array", "bearing_options", "bearing_tx_arrays"})
+                if (!str(k, "").empty())
+                    throw std::invalid_argument(
+                        std::string("key '") + k + "' needs bearing_algorithm (bearings are off)");
         if (s.autoChannel && !(s.scanPeriod_s > 0))
             throw std::invalid_argument("auto_channel = true needs scan_period > 0");
     }

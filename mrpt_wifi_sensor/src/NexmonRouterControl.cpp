@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <regex>
 #include <sstream>
 
@@ -41,12 +42,52 @@ std::optional<Chanspec> chanspecFromFrequencyMHz(int freqMHz)
     }
     return std::nullopt;
 }
+bool onlyCharsOf(const std::string& s, const char* extra)
+{
+    return !s.empty() && std::all_of(
+                             s.begin(), s.end(),
+                             [extra](char c)
+                             {
+                                 return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                                        (c >= '0' && c <= '9') ||
+                                        (c != '\0' && std::strchr(extra, c));
+                             });
+}
+constexpr const char* kNameExtra = "_.-";
+constexpr const char* kPathExtra = "_./+@%:,=-";
 }  // namespace
+
+std::string shellQuote(const std::string& word)
+{
+    if (onlyCharsOf(word, kPathExtra)) return word;
+    std::string q = "'";
+    for (char c : word) q += (c == '\'' ? std::string("'\\''") : std::string(1, c));
+    return q + "'";
+}
+
+void RouterSetupOptions::validate() const
+{
+    const auto check =
+        [](const std::string& key, const std::string& value, const char* extra, const char* what)
+    {
+        if (!onlyCharsOf(value, extra))
+            throw std::invalid_argument(
+                "key '" + key + "': '" + value + "' is not " + what +
+                " (it is sent to the router's shell)");
+    };
+    check(
+        "setup_module_path", modulePath, kPathExtra,
+        "a module path ([A-Za-z0-9_./+@%:,=-], no whitespace or shell metacharacters)");
+    check("setup_bridge", bridge, kNameExtra, "a bridge name ([A-Za-z0-9_.-]+)");
+    check("setup_interface_5g", interface5G, kNameExtra, "an interface name ([A-Za-z0-9_.-]+)");
+    check("setup_interface_2g4", interface2G4, kNameExtra, "an interface name ([A-Za-z0-9_.-]+)");
+}
 
 NexmonRouterControl::NexmonRouterControl(
     std::shared_ptr<RouterShell> shell, RouterSetupOptions options)
     : shell_(std::move(shell)), options_(std::move(options))
 {
+    options_.validate();
 }
 
 std::string NexmonRouterControl::interfaceFor(WifiBand band) const
@@ -58,8 +99,8 @@ void NexmonRouterControl::loadFirmwareModule()
 {
     // rmmod may fail when the module isn't loaded yet: that's fine, insmod decides.
     shell_->run(
-        "rmmod dhd; insmod " + options_.modulePath + " && brctl addif " + options_.bridge + " " +
-            options_.interface5G,
+        "rmmod dhd; insmod " + shellQuote(options_.modulePath) + " && brctl addif " +
+            shellQuote(options_.bridge) + " " + shellQuote(options_.interface5G),
         options_.commandTimeout_s);
 }
 
@@ -67,7 +108,7 @@ std::string NexmonRouterControl::configureCommand(const CsiExtractionSettings& s
 {
     if (s.macFilter.size() > 4)
         throw std::invalid_argument("the firmware filters at most 4 MAC addresses");
-    const std::string iface = interfaceFor(s.chanspec.band);
+    const std::string iface = shellQuote(interfaceFor(s.chanspec.band));
     const std::string cs = s.chanspec.asBroadcomString();
     std::string params = "makecsiparams -e 1 -c " + cs + " -C " + hexByte(s.coreMask) + " -N " +
                          hexByte(s.streamMask);
@@ -91,8 +132,8 @@ void NexmonRouterControl::configure(const CsiExtractionSettings& s)
 
 Chanspec NexmonRouterControl::currentChanspec(WifiBand band)
 {
-    const std::string out =
-        shell_->run("wl -i " + interfaceFor(band) + " chanspec", options_.commandTimeout_s);
+    const std::string out = shell_->run(
+        "wl -i " + shellQuote(interfaceFor(band)) + " chanspec", options_.commandTimeout_s);
     // "157/80 (0xe29b)": the hex word is unambiguous.
     static const std::regex hexWord("0x([0-9a-fA-F]{4})");
     std::smatch m;
@@ -114,7 +155,7 @@ Chanspec NexmonRouterControl::currentChanspec(WifiBand band)
 
 std::vector<ScannedAccessPoint> NexmonRouterControl::scan(WifiBand band)
 {
-    const std::string iface = interfaceFor(band);
+    const std::string iface = shellQuote(interfaceFor(band));
     char wait[32];
     std::snprintf(wait, sizeof(wait), "%.1f", options_.scanWait_s);
     const std::string out = shell_->run(
@@ -125,7 +166,7 @@ std::vector<ScannedAccessPoint> NexmonRouterControl::scan(WifiBand band)
 
 void NexmonRouterControl::startTransmitter(const TransmitterSettings& t, WifiBand band)
 {
-    const std::string iface = interfaceFor(band);
+    const std::string iface = shellQuote(interfaceFor(band));
     const auto frame = makeBeaconFrame(t.source, "mrpt_wifi", 0);
     const unsigned periodUs = unsigned(1e6 / std::max(0.1, t.rate_Hz));
     std::ostringstream cmd;

@@ -17,6 +17,7 @@
 #include <fstream>
 
 #include "SyntheticWorld.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -44,7 +45,7 @@ const char* kApsYaml = R"(transmitters:
 
 std::string writeTemp(const std::string& name, const std::string& text)
 {
-    const std::string path = mrpt::system::getTempFileName() + "_" + name;
+    const std::string path = mrpt_wifi::test::tempPath() + "_" + name;
     std::ofstream(path) << text;
     return path;
 }

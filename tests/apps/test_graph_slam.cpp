@@ -5,6 +5,7 @@
 #include <mrpt_wifi/localization/BearingGraphSlam.h>
 
 #include "SyntheticWorld.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -157,7 +158,7 @@ TEST(GraphSlamMrptGraph, OdometryFromAnMrptGraphFile)
         e.cov_inv(2, 2) = 1 / (0.02 * 0.02);
         g.insertEdge(k - 1, k, e);
     }
-    const std::string path = mrpt::system::getTempFileName() + ".graph";
+    const std::string path = mrpt_wifi::test::tempPath() + ".graph";
     g.saveToTextFile(path);
     mrpt::graphs::CNetworkOfPoses2DInf loaded;
     loaded.loadFromTextFile(path);

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "SyntheticWorld.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -47,7 +48,7 @@ struct Fixture
     World w;
     Fixture()
     {
-        dir = mrpt::system::getTempFileName() + "_apps";
+        dir = mrpt_wifi::test::tempPath() + "_apps";
         mrpt::system::createDirectory(dir);
         WorldOptions o;
         o.duration_s = 60;

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "SyntheticWorld.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -17,7 +18,7 @@ namespace
 {
 std::string writeTemp(const std::string& text)
 {
-    const std::string path = mrpt::system::getTempFileName();
+    const std::string path = mrpt_wifi::test::tempPath();
     std::ofstream(path) << text;
     return path;
 }
@@ -88,7 +89,7 @@ TEST(LocalizationCsv, ErrorsNameTheLine)
 TEST(LocalizationCsv, WriteReadRoundTrip)
 {
     const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}, {5, 1, 1}}), {});
-    const auto path = mrpt::system::getTempFileName();
+    const auto path = mrpt_wifi::test::tempPath();
     writeBearingCsv(path, w.bearings);
     const auto back = readBearingCsv(path, {});
     ASSERT_EQ(back.size(), w.bearings.size());
@@ -106,7 +107,7 @@ TEST(LocalizationTrajectory, TumRoundTripAndInterpolation)
     Trajectory2D t;
     t.push_back(10.0, {0, 0, 3.0});
     t.push_back(11.0, {1, 2, -3.0});  // yaw crosses ±π
-    const auto path = mrpt::system::getTempFileName();
+    const auto path = mrpt_wifi::test::tempPath();
     t.saveTum(path);
     const auto b = Trajectory2D::fromTumFile(path);
     ASSERT_EQ(b.size(), 2u);
@@ -143,7 +144,7 @@ TEST(LocalizationTrajectory, AteAlignsRigidlyAsEvo)
 TEST(LocalizationRawlog, PfRawlogRoundTrip)
 {
     const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}}), {});
-    const auto path = mrpt::system::getTempFileName() + ".rawlog";
+    const auto path = mrpt_wifi::test::tempPath() + ".rawlog";
     const size_t n = writePfRawlog(path, w.bearings, w.odometry);
     EXPECT_EQ(n, w.bearings.size() + w.odometry.size());
     const auto c = readRawlog(path);

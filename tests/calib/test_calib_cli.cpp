@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "CalibTestSupport.h"
+#include "TestSupport.h"
 
 namespace
 {
@@ -33,7 +34,7 @@ std::string slurp(const std::string& path)
 Run run(const std::string& args)
 {
     static int n = 0;
-    const std::string base = mrpt::system::getTempFileName() + "_run" + std::to_string(n++);
+    const std::string base = mrpt_wifi::test::tempPath() + "_run" + std::to_string(n++);
     const int st = std::system((args + " >" + base + ".out 2>" + base + ".err").c_str());
     Run r;
     r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
@@ -59,7 +60,7 @@ class CalibCli : public ::testing::Test
 protected:
     static void SetUpTestSuite()
     {
-        root_ = mrpt::system::getTempFileName() + "_calibcli";
+        root_ = mrpt_wifi::test::tempPath() + "_calibcli";
         mrpt::system::createDirectory(root_);
         calibtest::DriveSpec d;
         d.duration_s = 40;

@@ -13,6 +13,8 @@
 #include <fstream>
 #include <random>
 
+#include "TestSupport.h"
+
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::calib;
 
@@ -26,7 +28,7 @@ AntennaArray rtac86u()
 
 std::string tempFile(const std::string& name, const std::string& text)
 {
-    const std::string path = mrpt::system::getTempFileName() + "_" + name;
+    const std::string path = mrpt_wifi::test::tempPath() + "_" + name;
     std::ofstream(path) << text;
     return path;
 }
@@ -165,7 +167,7 @@ TEST(CalibUnits, SolverRecoversSyntheticPhases)
     for (double v : res.calibration.phases_rad[0]) EXPECT_EQ(v, 0.0);  // antenna 0 fixed
 
     // The file it makes round-trips through the format and applies like the solver's phases.
-    const std::string dir = mrpt::system::getTempFileName() + "_caldir";
+    const std::string dir = mrpt_wifi::test::tempPath() + "_caldir";
     const std::string path = PhaseCalibration::pathFor(dir, a.name, res.calibration.chanspec);
     res.calibration.saveYamlFile(path);
     const auto store = CalibrationStore::open(dir);

@@ -89,3 +89,29 @@ TEST(NexmonRouterControl, TransmitterLoopIsBoundedAndKeepsTheWholeMac)
         std::vector<uint8_t>(t.source.bytes.begin(), t.source.bytes.end()));
     EXPECT_EQ(frame[0], 0x80);
 }
+
+TEST(NexmonRouterControl, ShellValuesAreValidatedAndQuoted)
+{
+    auto shell = std::make_shared<RecordingShell>();
+    RouterSetupOptions o;
+    o.interface5G = "eth6; reboot";
+    try
+    {
+        NexmonRouterControl router(shell, o);
+        ADD_FAILURE() << "an interface name with a ';' was accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("setup_interface_5g"), std::string::npos) << e.what();
+    }
+    o = RouterSetupOptions();
+    o.modulePath = "/jffs/dhd.ko\nreboot";
+    EXPECT_THROW(NexmonRouterControl(shell, o), std::invalid_argument);
+    EXPECT_TRUE(shell->commands.empty());
+
+    // Safe words stay as they are; anything else becomes one single-quoted word.
+    EXPECT_EQ(shellQuote("/jffs/nexmon/dhd.ko"), "/jffs/nexmon/dhd.ko");
+    EXPECT_EQ(shellQuote("eth6; reboot"), "'eth6; reboot'");
+    EXPECT_EQ(shellQuote("it's"), "'it'\\''s'");
+    EXPECT_EQ(shellQuote(""), "''");
+}

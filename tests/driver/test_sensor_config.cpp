@@ -70,3 +70,24 @@ TEST(CWiFiCSISensorConfig, WrongKeysAndValuesAreNamed)
         "05\n");
     EXPECT_NE(e.find("at most 4"), std::string::npos) << e;
 }
+
+TEST(CWiFiCSISensorConfig, ValuesForTheRouterShellAreValidated)
+{
+    // A typo that would be a second command in the router's shell is an error naming the key.
+    for (const char* key :
+         {"setup_interface_5g", "setup_interface_2g4", "setup_bridge", "setup_module_path"})
+        for (const char* value :
+             {"eth6; reboot", "eth6 && reboot", "$(reboot)", "`reboot`", "eth6|reboot", "a b",
+              "x'y", "eth6>/jffs/x"})
+        {
+            const auto e = loadError(
+                std::string("[CSI]\nprocess_rate = 100\nrouter_control = true\n") + key + " = " +
+                value + "\n");
+            EXPECT_NE(e.find(std::string("key '") + key + "'"), std::string::npos)
+                << key << " = " << value << ": " << e;
+        }
+    EXPECT_EQ(
+        loadError("[CSI]\nprocess_rate = 100\nsetup_interface_5g = wl0.1\nsetup_bridge = br-lan\n"
+                  "setup_module_path = /jffs/nexmon/dhd_v2.ko\n"),
+        "");
+}

@@ -9,6 +9,8 @@
 
 #include <fstream>
 
+#include "TestSupport.h"
+
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::sim;
 
@@ -173,7 +175,7 @@ TEST(Scenario, YamlSyntaxErrorNamesTheFile)
 
 TEST(Scenario, FromFileReportsTheFileName)
 {
-    const std::string path = mrpt::system::getTempFileName() + ".yaml";
+    const std::string path = mrpt_wifi::test::tempPath() + ".yaml";
     std::ofstream(path) << replaced(kValid, "seed: 3", "seed: 3\nbogus: 1");
     try
     {

@@ -17,6 +17,8 @@
 #include <map>
 #include <sstream>
 
+#include "TestSupport.h"
+
 using namespace mrpt_wifi;
 
 namespace
@@ -45,7 +47,7 @@ Run run(const std::string& args)
 
 std::string tempDir(const std::string& name)
 {
-    const std::string d = mrpt::system::getTempFileName() + "_" + name;
+    const std::string d = mrpt_wifi::test::tempPath() + "_" + name;
     mrpt::system::createDirectory(d);
     return d;
 }

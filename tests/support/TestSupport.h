@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -67,6 +68,18 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+/** A fresh path (nothing created there yet) inside this test program's own temporary folder,
+ *  which is removed when the program exits: `tempPath(".yaml")` →
+ * `/tmp/mrpt_wifi_test_Ab12Cd/7.yaml`. Use it instead of mrpt::system::getTempFileName(), which
+ * always creates an empty
+ *  `/tmp/mrpt_temp*` file (ignoring TMPDIR) that nothing removes. */
+inline std::string tempPath(const std::string& suffix = {})
+{
+    static const TempDir dir;
+    static std::atomic<unsigned> counter{0};
+    return dir.file(std::to_string(counter++) + suffix);
+}
 
 struct CommandResult
 {

@@ -21,6 +21,11 @@ namespace mrpt_wifi
 {
 class UdpCsiReceiver;
 class PcapReader;
+class LiveBearingWorker;
+namespace bearing
+{
+class BearingProcessor;
+}
 
 /** Captures WiFi CSI from an Asus RT-AC86U running Nexmon CSI firmware, as
  * mrpt_wifi::CObservationWiFiCSI, inside `rawlog-grabber` or any MRPT program.
@@ -71,6 +76,9 @@ public:
     std::optional<Chanspec> configuredChannel() const;
     /** Downtime of the last completed channel switch [s]. */
     std::optional<double> lastSwitchDowntime() const;
+    /** The live bearing estimation (`bearing_algorithm`), or nullptr when it is off or before
+     *  initialize(). */
+    LiveBearingWorker* bearingWorker() { return bearings_.get(); }
 
 protected:
     void loadConfig_sensorSpecific(
@@ -117,6 +125,16 @@ private:
     std::optional<double> lastSwitchDowntime_;
     std::unique_ptr<AccessPointSelector> selector_;
     mrpt::Clock::time_point lastScan_, lastStatus_;
+
+    // Live bearings (bearing_* keys): frames go through the worker, which returns them in order
+    // followed by their bearing observations.
+    std::unique_ptr<bearing::BearingProcessor> bearingProcessor_;  //!< built by loadConfig
+    std::unique_ptr<LiveBearingWorker> bearings_;
+    uint64_t bearingsAtLastStatus_ = 0, skippedAtLastStatus_ = 0;
+    mrpt::Clock::time_point bearingStatusTime_;
+    void startBearings();
+    void deliverBearings();
+    std::string bearingStatus();
 
     Counters counters_;
     std::string lastError_;

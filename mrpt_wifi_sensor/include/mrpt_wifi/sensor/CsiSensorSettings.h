@@ -4,6 +4,7 @@
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt_wifi/sensor/AccessPointSelector.h>
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
+#include <mrpt_wifi/sensor/LiveBearingWorker.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 #include <mrpt_wifi/sensor/UdpCsiReceiver.h>
 
@@ -50,6 +51,8 @@ struct CsiSensorSettings
     bool autoChannel = false;
     bool autoMacFilter = true;
     AccessPointSelectorOptions selector;
+
+    LiveBearingSettings bearing;  //!< `bearing_*`: bearings next to the capture (off: empty)
 };
 
 /** Reads a [section] of a rawlog-grabber .ini. Unknown keys and bad values throw

@@ -41,13 +41,24 @@ struct RouterSetupOptions
     std::string interface2G4 = "eth5";
     double commandTimeout_s = 10.0;
     double scanWait_s = 3.0;  //!< between `wl scan` and `wl scanresults`
+
+    /** These values reach the router's shell: interface and bridge names must match
+     *  `[A-Za-z0-9_.-]+`, the module path `[A-Za-z0-9_./+@%:,=-]+` (no whitespace, no shell
+     *  metacharacters). Throws std::invalid_argument naming the .ini key (`setup_module_path`,
+     *  `setup_bridge`, `setup_interface_5g`, `setup_interface_2g4`) and the value. */
+    void validate() const;
 };
+
+/** `word` as one POSIX shell word: unchanged when it holds only `[A-Za-z0-9_./+@%:,=-]`,
+ *  otherwise in single quotes (a `'` inside becomes `'\''`), as Python's shlex.quote. */
+std::string shellQuote(const std::string& word);
 
 /** Configures an RT-AC86U running Nexmon CSI through its shell, with the same commands WiROS
  * issues (DESIGN.md §4), batched so a reconfiguration costs one round trip. */
 class NexmonRouterControl
 {
 public:
+    /** Throws std::invalid_argument if `options` fail RouterSetupOptions::validate(). */
     NexmonRouterControl(std::shared_ptr<RouterShell> shell, RouterSetupOptions options);
 
     /** Once per router boot: reload the patched driver and bridge the 5 GHz interface. */
