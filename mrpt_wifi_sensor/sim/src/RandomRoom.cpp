@@ -46,21 +46,21 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
     y << "seed: " << seed << "\n\n";
     y << "room:\n  corners: [[0, 0], [" << W << ", 0], [" << W << ", " << H << "], [0, " << H
       << "]]\n";
-    const double gamma = U(0.25, 0.55);
+    const double gamma = U(0.2, 0.5);
     y << "  reflection: {magnitude: " << gamma << ", phase_deg: " << U(160, 200) << "}\n\n";
 
     // Furniture: segments away from the walls; their edges scatter.
     std::vector<Point> edgePoints;
     y << "obstacles:\n";
-    const int nFurniture = I(1, 3);
+    const int nFurniture = I(1, 2);
     for (int i = 0; i < nFurniture; ++i)
     {
-        const double len = U(0.8, 2.0), a = U(-M_PI, M_PI);
+        const double len = U(0.6, 1.5), a = U(-M_PI, M_PI);
         const Point c{U(1.2, W - 1.2), U(1.2, H - 1.2)};
         const Point p{c.x - 0.5 * len * std::cos(a), c.y - 0.5 * len * std::sin(a)};
         const Point q{c.x + 0.5 * len * std::cos(a), c.y + 0.5 * len * std::sin(a)};
         y << "  - {name: furniture" << i << ", from: " << pt(p) << ", to: " << pt(q)
-          << ", attenuation_db: " << U(6, 15) << "}\n";
+          << ", attenuation_db: " << U(3, 10) << "}\n";
         edgePoints.push_back(p);
         edgePoints.push_back(q);
     }
@@ -72,7 +72,7 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
         y << "  - {name: s" << ns++ << ", position: " << pt(p) << ", rcs_m2: " << rcs
           << ", phase_deg: " << U(-180, 180) << "}\n";
     };
-    for (const auto& p : edgePoints) scatterer(p, U(0.1, 0.5));
+    for (const auto& p : edgePoints) scatterer(p, U(0.02, 0.15));
     // Rough walls: weak scatterers 5–30 cm in front of each wall.
     for (int w = 0; w < 4; ++w)
         for (int k = I(2, 4); k > 0; --k)
@@ -82,14 +82,14 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
                             : w == 1 ? Point{W - d, U(0.3, H - 0.3)}
                             : w == 2 ? Point{U(0.3, W - 0.3), H - d}
                                      : Point{d, U(0.3, H - 0.3)};
-            scatterer(p, U(0.05, 0.3));
+            scatterer(p, U(0.02, 0.15));
         }
     // Clusters (a shelf of metal objects, a machine, a desk with a monitor).
     for (int c = I(1, 3); c > 0; --c)
     {
         const Point centre{U(0.8, W - 0.8), U(0.8, H - 0.8)};
         for (int k = I(3, 5); k > 0; --k)
-            scatterer({centre.x + U(-0.4, 0.4), centre.y + U(-0.4, 0.4)}, U(0.1, 1.0));
+            scatterer({centre.x + U(-0.4, 0.4), centre.y + U(-0.4, 0.4)}, U(0.05, 0.5));
     }
 
     // Access points near the walls, facing into the room within ±60°.
@@ -119,7 +119,7 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
     y << "\nreceiver:\n  label: WIFI_CSI\n  array: " << options.arraysDir << "/rt-ac86u.yaml\n"
       << "  sensor_pose: {x: 0.1, y: 0.0, z: 0.4, yaw_deg: 0}\n"
       << "  body_shadow: {center_deg: 180, width_deg: " << U(60, 140)
-      << ", attenuation_db: " << U(6, 20) << "}\n\n";
+      << ", attenuation_db: " << U(3, 8) << "}\n\n";
 
     const Point start{U(1.0, W - 1.0), U(1.0, H - 1.0)};
     y << "motion:\n  type: random_walk\n  start: [" << start.x << ", " << start.y << ", "
