@@ -330,12 +330,14 @@ struct RoomStats
     double median_deg = NAN, p90_deg = NAN, beyond30 = NAN;
     double withinTwoSigma = NAN, withinThreeSigma = NAN;
     double crbMedian_deg = NAN, meanStd_deg = NAN;
+    double medianStd_deg = NAN;     //!< reported σ, median over the estimates
+    double centralMedianStd_deg = NAN;
 };
 
 inline RoomStats summarize(const std::vector<ErrorRecord>& recs)
 {
     RoomStats s;
-    std::vector<double> all, central, crb;
+    std::vector<double> all, central, crb, sigmas, centralSigmas;
     size_t beyond = 0, cBeyond = 0, in2 = 0, in3 = 0;
     double stdSum = 0;
     for (const auto& r : recs)
@@ -343,6 +345,8 @@ inline RoomStats summarize(const std::vector<ErrorRecord>& recs)
         all.push_back(r.error_deg);
         crb.push_back(r.crb_deg);
         stdSum += r.std_deg;
+        sigmas.push_back(r.std_deg);
+        if (r.central) centralSigmas.push_back(r.std_deg);
         beyond += r.error_deg > 30;
         in2 += r.error_deg <= 2 * r.std_deg;
         in3 += r.error_deg <= 3 * r.std_deg;
@@ -363,6 +367,8 @@ inline RoomStats summarize(const std::vector<ErrorRecord>& recs)
     s.withinThreeSigma = double(in3) / double(all.size());
     s.crbMedian_deg = percentile(crb, 0.5);
     s.meanStd_deg = stdSum / double(all.size());
+    s.medianStd_deg = percentile(sigmas, 0.5);
+    s.centralMedianStd_deg = percentile(centralSigmas, 0.5);
     return s;
 }
 

@@ -37,7 +37,7 @@ int roomTables(
     {
         std::cout << "## " << toString(env) << "\n\n"
                   << "| estimator | SNR [dB] | median (central) | p90 (central) | >30° (central) "
-                     "| >30° (all) | median (all) | ≤2σ | ≤3σ | mean σ | CRB |\n"
+                     "| >30° (all) | median (all) | ≤2σ | ≤3σ | median σ (central / all) | CRB |\n"
                      "|---|---|---|---|---|---|---|---|---|---|---|\n";
         for (double snr : snrs)
         {
@@ -61,7 +61,8 @@ int roomTables(
                           << 100 * s.centralBeyond30 << " % | " << 100 * s.beyond30 << " % | "
                           << std::setprecision(2) << s.median_deg << " | " << std::setprecision(1)
                           << 100 * s.withinTwoSigma << " % | " << 100 * s.withinThreeSigma
-                          << " % | " << std::setprecision(2) << s.meanStd_deg << " | "
+                          << " % | " << std::setprecision(2) << s.centralMedianStd_deg << " / "
+                          << s.medianStd_deg << " | "
                           << std::setprecision(3) << s.crbMedian_deg << " |\n"
                           << std::flush;
             }

@@ -158,9 +158,12 @@ protected:
         return total;
     }
 
+    /** Quality, σ and the mirror pair of a bearing; `ambiguityR`: the covariance whose
+     *  other directions count as ambiguity (default: R). */
     void finish(
         BearingResult& r, double theta, const std::vector<Eigen::MatrixXcd>& R,
-        const std::vector<const CleanCsi*>& frames)
+        const std::vector<const CleanCsi*>& frames,
+        const std::vector<Eigen::MatrixXcd>* ambiguityR = nullptr)
     {
         const size_t n = rx_.size();
         const double power = fastGroupedForm(theta, R);
@@ -168,9 +171,57 @@ protected:
         const double sd = bearingStd(
             rx_, n, theta, R, gf_, gc_, snapshotsPerSubcarrier(frames), r.quality,
             opts_.stdFloor_deg * M_PI / 180);
-        setAoa(r, rx_, theta, sd);
+        const double amb = ambiguityStd(theta, ambiguityR ? *ambiguityR : R);
+        setAoa(r, rx_, theta, std::min(std::sqrt(sd * sd + amb * amb), M_PI / 2));
         r.framesUsed = unsigned(frames.size());
         r.valid = true;
+    }
+
+    /** Distance between two bearings, up to the mirror of a linear array. */
+    double foldedDistance(double a, double b) const
+    {
+        const double d = angleDistance(a, b);
+        return grid_.circular ? d : std::min(d, angleDistance(rx_.mirrorOf(a), b));
+    }
+
+    /** How far the window's CSI also supports other directions: every local maximum of the
+     *  wideband Bartlett spectrum (the grid's ends included, so the other endfire, where the
+     *  rt-ac86u's 26 mm spacing aliases, counts) at least a beamwidth from the chosen bearing,
+     *  with power ρ relative to the strongest, adds a σ of
+     *  kAmbiguityScale · distance · clamp((ρ − kAmbiguityFloor) / (1 − kAmbiguityFloor), 0, 1):
+     *  a frame with two comparable candidates says so with a σ that reaches the other one,
+     *  instead of a confident value that may be the wrong one. Constants chosen on the
+     *  development rooms (sim::kFirstEvaluationSeed). */
+    double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R)
+    {
+        constexpr double kAmbiguityFloor = 0.35, kAmbiguityScale = 0.5;
+        qf_.evaluate(R, ambSpec_);
+        const double pTheta = fastGroupedForm(theta, R);
+        const double pMax = std::max(ambSpec_.maxCoeff(), pTheta);
+        if (!(pMax > 0)) return 0;
+        const double beam = beamwidth();
+        double sigma = 0;
+        for (size_t i : findPeaks1D(ambSpec_, grid_.circular, 6))
+        {
+            const double d = foldedDistance(theta, grid_.angles[i]);
+            if (d < beam) continue;
+            const double rho = ambSpec_[Eigen::Index(i)] / pMax;
+            const double w =
+                std::clamp((rho - kAmbiguityFloor) / (1 - kAmbiguityFloor), 0.0, 1.0);
+            sigma = std::max(sigma, kAmbiguityScale * d * w);
+        }
+        return sigma;
+    }
+
+    /** Half-power beamwidth of the receive array at the band centre [rad]. */
+    double beamwidth() const
+    {
+        double aperture = 0;
+        for (size_t i = 0; i < rx_.size(); ++i)
+            for (size_t j = i + 1; j < rx_.size(); ++j)
+                aperture = std::max(aperture, (rx_.elements[i] - rx_.elements[j]).norm());
+        const double fc = layout_ ? layout_->centerFrequency_Hz : 5.5e9;
+        return aperture > 0 ? std::min(0.886 * kSpeedOfLightMps / fc / aperture, M_PI) : M_PI;
     }
 
     void keep1D(const Eigen::VectorXd& spectrum, const std::string& label, double peak)
@@ -197,7 +248,7 @@ protected:
     QuadraticFormGrid qf_;
     std::shared_ptr<const SubcarrierLayout> layout_;
     std::vector<Eigen::MatrixXcd> R_, Rd_;
-    Eigen::VectorXd spec_;
+    Eigen::VectorXd spec_, ambSpec_;
 };
 
 // =============================================================================================
@@ -311,6 +362,87 @@ protected:
 
     std::vector<double> delays_;
     AngleDelayProfile profile2d_;
+};
+
+// =============================================================================================
+/** (0) The recommended default: the 2-D bearing × delay profile of an 8-frame window (frames
+ *  combined while the robot moves decorrelate the reflections), SpotFi's delay rule done on the
+ *  robust matched-filter profile (among the peaks with at least `direct_path_power_ratio` of the
+ *  strongest one's power, the earliest delay is the direct path; peaks within 5 ns of it, which
+ *  the band can't separate, go to the strongest), the bearing polished with per-sub-band
+ *  wavelengths on the CSI matched to that delay, and a σ that includes what the same delay
+ *  also supports (the other endfire, a path the band can't separate). */
+class DefaultEstimator : public ProfileEstimator
+{
+public:
+    DefaultEstimator()
+    {
+        opts_.window = 8;
+        opts_.directPathPowerRatio = 0.5;
+    }
+    std::string name() const override { return "default"; }
+    std::string description() const override
+    {
+        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma";
+    }
+    std::vector<std::string> parameterKeys() const override
+    {
+        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio"});
+    }
+
+    bool estimate(
+        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx,
+        BearingResult& r) override
+    {
+        r = BearingResult();
+        if (!prepare(frames, ctx)) return false;
+        profile2d_.reset();
+        double energy = 0;
+        for (const auto* f : frames)
+        {
+            profile2d_.accumulate(f->H, f->nTx);
+            energy += f->H.squaredNorm();
+        }
+        const Eigen::MatrixXf& P = profile2d_.power();
+        const auto peaks = findPeaks2D(P, grid_.circular, 4);
+        if (peaks.empty()) return false;
+        struct Candidate
+        {
+            double theta, delay, power;
+        };
+        std::vector<Candidate> cands;
+        double maxPower = 0;
+        for (const auto& p0 : peaks)
+        {
+            const Peak2D p = refinePeak2D(P, p0.i, p0.j, grid_.circular);
+            cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
+            maxPower = std::max(maxPower, double(p.value));
+        }
+        constexpr double kSameDelay_s = 5e-9;
+        double earliest = INFINITY;
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower)
+                earliest = std::min(earliest, c.delay);
+        Candidate chosen{0, 0, -1};
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower &&
+                c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
+                chosen = c;
+        double theta = chosen.theta;
+        delayFilteredCovariances(frames, chosen.delay, opts_.frequencyGroups, Rd_);
+        if (opts_.refine) theta = polishBartlett(theta, Rd_);
+        sumCovariances(frames, opts_.frequencyGroups, false, R_);
+        finish(r, theta, R_, frames, &Rd_);
+        const double nSub = double(layout_->size());
+        r.quality =
+            std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
+        r.hasDelay = true;
+        r.delay_s = chosen.delay;
+        r.pathsDetected = unsigned(cands.size());
+        keep2D(P, "Bartlett power", r.aoa_rad, chosen.delay);
+        if (hasProfile_) profile_.peakAngle_rad = theta;
+        return true;
+    }
 };
 
 // =============================================================================================
@@ -897,14 +1029,16 @@ private:
 
 std::vector<std::string> estimatorNames()
 {
-    return {"aoa_only", "fft", "svd", "music", "spotfi", "aod", "esprit"};
+    return {"default", "aoa_only", "fft", "svd", "music", "spotfi", "aod", "esprit"};
 }
 
 std::unique_ptr<BearingEstimator> createEstimator(
     const std::string& name, const mrpt::containers::yaml& params)
 {
     std::unique_ptr<BearingEstimator> e;
-    if (name == "aoa_only")
+    if (name == "default")
+        e = std::make_unique<DefaultEstimator>();
+    else if (name == "aoa_only")
         e = std::make_unique<AoaOnlyEstimator>();
     else if (name == "fft")
         e = std::make_unique<ProfileEstimator>();
