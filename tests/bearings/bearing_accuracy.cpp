@@ -22,7 +22,7 @@ namespace
 /** The random-room tables: every estimator, LoS-only and moderate multipath, 10–30 dB. */
 int roomTables(
     unsigned rooms, bool evaluation, unsigned estimatesPerRoom, const std::vector<double>& snrs,
-    const std::vector<std::string>& algos)
+    const std::vector<std::string>& algos, const std::string& params, unsigned windowFrames)
 {
     const auto seeds = roomSeeds(evaluation, rooms);
     std::cout << std::fixed << std::setprecision(2);
@@ -48,12 +48,14 @@ int roomTables(
                 c.environment = env;
                 c.snr_dB = snr;
                 c.estimates = estimatesPerRoom;
+                c.windowFrames = windowFrames;
                 data.push_back(makeRandomRoomDataset(c, seed));
             }
             for (const auto& n : algos)
             {
                 std::vector<ErrorRecord> recs;
-                for (const auto& d : data) collectErrors(d, n, recs);
+                for (const auto& d : data)
+                    collectErrors(d, n, recs, mrpt::containers::yaml::FromText(params));
                 const RoomStats s = summarize(recs);
                 std::cout << "| " << n << " | " << std::setprecision(0) << snr
                           << std::setprecision(2) << " | " << s.centralMedian_deg << " | "
@@ -95,6 +97,8 @@ int main(int argc, char** argv)
     bool development = false;
     std::vector<double> snrs = {10, 20, 25, 30};
     std::vector<std::string> algos;
+    std::string params = "{}";
+    unsigned windowFrames = 8;
     for (int i = 1; i < argc; ++i)
     {
         if (!std::strcmp(argv[i], "--estimates") && i + 1 < argc)
@@ -109,11 +113,15 @@ int main(int argc, char** argv)
             snrs = {std::atof(argv[++i])};
         else if (!std::strcmp(argv[i], "--algo") && i + 1 < argc)
             algos.push_back(argv[++i]);
+        else if (!std::strcmp(argv[i], "--params") && i + 1 < argc)
+            params = argv[++i];
+        else if (!std::strcmp(argv[i], "--window-frames") && i + 1 < argc)
+            windowFrames = unsigned(std::atoi(argv[++i]));
         else
         {
             std::cerr << "usage: bearing-accuracy [--estimates N] [--quick]\n"
                          "       bearing-accuracy --rooms N [--development] [--estimates "
-                         "PER_ROOM] [--snr DB] [--algo NAME]...\n";
+                         "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n";
             return 1;
         }
     }
@@ -122,7 +130,7 @@ int main(int argc, char** argv)
         if (algos.empty())
             for (const auto& n : bearing::estimatorNames())
                 if (n != "aod") algos.push_back(n);
-        return roomTables(rooms, !development, estimates, snrs, algos);
+        return roomTables(rooms, !development, estimates, snrs, algos, params, windowFrames);
     }
     const auto names = bearing::estimatorNames();
     std::cout << std::fixed << std::setprecision(2);
