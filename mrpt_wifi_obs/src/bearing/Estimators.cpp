@@ -365,87 +365,6 @@ protected:
 };
 
 // =============================================================================================
-/** (0) The recommended default: the 2-D bearing × delay profile of an 8-frame window (frames
- *  combined while the robot moves decorrelate the reflections), SpotFi's delay rule done on the
- *  robust matched-filter profile (among the peaks with at least `direct_path_power_ratio` of the
- *  strongest one's power, the earliest delay is the direct path; peaks within 5 ns of it, which
- *  the band can't separate, go to the strongest), the bearing polished with per-sub-band
- *  wavelengths on the CSI matched to that delay, and a σ that includes what the same delay
- *  also supports (the other endfire, a path the band can't separate). */
-class DefaultEstimator : public ProfileEstimator
-{
-public:
-    DefaultEstimator()
-    {
-        opts_.window = 8;
-        opts_.directPathPowerRatio = 0.5;
-    }
-    std::string name() const override { return "default"; }
-    std::string description() const override
-    {
-        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma";
-    }
-    std::vector<std::string> parameterKeys() const override
-    {
-        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio"});
-    }
-
-    bool estimate(
-        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx,
-        BearingResult& r) override
-    {
-        r = BearingResult();
-        if (!prepare(frames, ctx)) return false;
-        profile2d_.reset();
-        double energy = 0;
-        for (const auto* f : frames)
-        {
-            profile2d_.accumulate(f->H, f->nTx);
-            energy += f->H.squaredNorm();
-        }
-        const Eigen::MatrixXf& P = profile2d_.power();
-        const auto peaks = findPeaks2D(P, grid_.circular, 4);
-        if (peaks.empty()) return false;
-        struct Candidate
-        {
-            double theta, delay, power;
-        };
-        std::vector<Candidate> cands;
-        double maxPower = 0;
-        for (const auto& p0 : peaks)
-        {
-            const Peak2D p = refinePeak2D(P, p0.i, p0.j, grid_.circular);
-            cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
-            maxPower = std::max(maxPower, double(p.value));
-        }
-        constexpr double kSameDelay_s = 5e-9;
-        double earliest = INFINITY;
-        for (const auto& c : cands)
-            if (c.power >= opts_.directPathPowerRatio * maxPower)
-                earliest = std::min(earliest, c.delay);
-        Candidate chosen{0, 0, -1};
-        for (const auto& c : cands)
-            if (c.power >= opts_.directPathPowerRatio * maxPower &&
-                c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
-                chosen = c;
-        double theta = chosen.theta;
-        delayFilteredCovariances(frames, chosen.delay, opts_.frequencyGroups, Rd_);
-        if (opts_.refine) theta = polishBartlett(theta, Rd_);
-        sumCovariances(frames, opts_.frequencyGroups, false, R_);
-        finish(r, theta, R_, frames, &Rd_);
-        const double nSub = double(layout_->size());
-        r.quality =
-            std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
-        r.hasDelay = true;
-        r.delay_s = chosen.delay;
-        r.pathsDetected = unsigned(cands.size());
-        keep2D(P, "Bartlett power", r.aoa_rad, chosen.delay);
-        if (hasProfile_) profile_.peakAngle_rad = theta;
-        return true;
-    }
-};
-
-// =============================================================================================
 /** (3) Windowed SVD: the principal components of the window's CSI (one column per frame and
  *  stream) keep what is consistent across frames (the direct path, for a moving robot) and
  *  suppress reflections that change; the components then feed the 2-D profile. */
@@ -643,11 +562,8 @@ public:
         pseudo_ = (norm2 - proj_.array()).cwiseMax(1e-6f * norm2).inverse().matrix();
 
         const auto peaks = findPeaks2D(pseudo_, grid_.circular, K);
-        struct Candidate
-        {
-            double theta, delay, power;
-        };
-        std::vector<Candidate> cands;
+        std::vector<Candidate>& cands = cands_;
+        cands.clear();
         double maxPower = 0;
         const Eigen::MatrixXcd RsD = Rs_.cast<std::complex<double>>();
         for (const auto& p0 : peaks)
@@ -723,7 +639,16 @@ protected:
                   .cast<std::complex<float>>();
     }
 
-private:
+public:
+    struct Candidate
+    {
+        double theta, delay, power;
+    };
+    /** The 2-D MUSIC peaks of the last estimate (bearing, delay, Bartlett power). */
+    const std::vector<Candidate>& candidates() const { return cands_; }
+
+protected:
+    std::vector<Candidate> cands_;
     double step_ = 4;
     unsigned Ls_ = 16;
     std::vector<int> gridK_;
@@ -732,6 +657,107 @@ private:
     Eigen::MatrixXcf U_, Xs_, Rs_, Ej_, Dm_, At_, B_, C_;
     Eigen::MatrixXf proj_, pseudo_;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> esS_;
+};
+
+// =============================================================================================
+/** (0) The recommended default: the 2-D bearing × delay profile of an 8-frame window (frames
+ *  combined while the robot moves decorrelate the reflections), SpotFi's delay rule done on the
+ *  robust matched-filter profile (among the peaks with at least `direct_path_power_ratio` of the
+ *  strongest one's power, the earliest delay is the direct path; peaks within 5 ns of it, which
+ *  the band can't separate, go to the strongest), the bearing polished with per-sub-band
+ *  wavelengths on the CSI matched to that delay, and a σ that includes what the same delay
+ *  also supports (the other endfire, a path the band can't separate). */
+class DefaultEstimator : public ProfileEstimator
+{
+public:
+    DefaultEstimator()
+    {
+        opts_.window = 8;
+        opts_.directPathPowerRatio = 0.5;
+    }
+    std::string name() const override { return "default"; }
+    std::string description() const override
+    {
+        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma";
+    }
+    std::vector<std::string> parameterKeys() const override
+    {
+        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio"});
+    }
+
+    bool estimate(
+        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx,
+        BearingResult& r) override
+    {
+        r = BearingResult();
+        if (!prepare(frames, ctx)) return false;
+        profile2d_.reset();
+        double energy = 0;
+        for (const auto* f : frames)
+        {
+            profile2d_.accumulate(f->H, f->nTx);
+            energy += f->H.squaredNorm();
+        }
+        const Eigen::MatrixXf& P = profile2d_.power();
+        const auto peaks = findPeaks2D(P, grid_.circular, 4);
+        if (peaks.empty()) return false;
+        struct Candidate
+        {
+            double theta, delay, power;
+        };
+        std::vector<Candidate> cands;
+        double maxPower = 0;
+        for (const auto& p0 : peaks)
+        {
+            const Peak2D p = refinePeak2D(P, p0.i, p0.j, grid_.circular);
+            cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
+            maxPower = std::max(maxPower, double(p.value));
+        }
+        constexpr double kSameDelay_s = 5e-9;
+        double earliest = INFINITY;
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower)
+                earliest = std::min(earliest, c.delay);
+        Candidate chosen{0, 0, -1};
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower &&
+                c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
+                chosen = c;
+        double theta = chosen.theta;
+        delayFilteredCovariances(frames, chosen.delay, opts_.frequencyGroups, Rd_);
+        if (opts_.refine) theta = polishBartlett(theta, Rd_);
+        // Super-resolution: the 2-D MUSIC peak of the same path, when there is one, separates
+        // it from the paths the matched filter blurs into it.
+        if (spotfi_.estimate(frames, ctx, spotfiResult_))
+        {
+            double bestD = 0.2 * beamwidth();
+            for (const auto& c : spotfi_.candidates())
+            {
+                const double d = foldedDistance(theta, c.theta);
+                if (d < bestD && std::abs(c.delay - chosen.delay) < kSameDelay_s * 2)
+                {
+                    bestD = d;
+                    theta = angleDistance(theta, c.theta) <= d + 1e-9 ? c.theta
+                                                                       : rx_.mirrorOf(c.theta);
+                }
+            }
+        }
+        sumCovariances(frames, opts_.frequencyGroups, false, R_);
+        finish(r, theta, R_, frames, &Rd_);
+        const double nSub = double(layout_->size());
+        r.quality =
+            std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
+        r.hasDelay = true;
+        r.delay_s = chosen.delay;
+        r.pathsDetected = unsigned(cands.size());
+        keep2D(P, "Bartlett power", r.aoa_rad, chosen.delay);
+        if (hasProfile_) profile_.peakAngle_rad = theta;
+        return true;
+    }
+
+private:
+    SpotFiEstimator spotfi_;
+    BearingResult spotfiResult_;
 };
 
 // =============================================================================================
