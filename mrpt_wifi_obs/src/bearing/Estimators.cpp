@@ -171,7 +171,7 @@ protected:
         const double sd = bearingStd(
             rx_, n, theta, R, gf_, gc_, snapshotsPerSubcarrier(frames), r.quality,
             opts_.stdFloor_deg * M_PI / 180);
-        const double amb = ambiguityStd(theta, ambiguityR ? *ambiguityR : R);
+        const double amb = ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality);
         setAoa(r, rx_, theta, std::min(std::sqrt(sd * sd + amb * amb), M_PI / 2));
         r.framesUsed = unsigned(frames.size());
         r.valid = true;
@@ -186,28 +186,30 @@ protected:
 
     /** How far the window's CSI also supports other directions: every local maximum of the
      *  wideband Bartlett spectrum (the grid's ends included, so the other endfire, where the
-     *  rt-ac86u's 26 mm spacing aliases, counts) at least a beamwidth from the chosen bearing,
-     *  with power ρ relative to the strongest, adds a σ of
-     *  kAmbiguityScale · distance · clamp((ρ − kAmbiguityFloor) / (1 − kAmbiguityFloor), 0, 1):
-     *  a frame with two comparable candidates says so with a σ that reaches the other one,
-     *  instead of a confident value that may be the wrong one. Constants chosen on the
-     *  development rooms (sim::kFirstEvaluationSeed). */
-    double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R)
+     *  rt-ac86u's 26 mm spacing aliases, counts) at least a beamwidth from the chosen bearing
+     *  is a candidate. Power the chosen plane wave leaves unexplained (1 − quality) can move
+     *  the two peaks' powers by about 2√(1 − q) of the total, so a candidate with relative power
+     *  ρ is ambiguous by w = clamp(1 − (1 − ρ) / (kMargin · 2√(1 − q)), 0, 1) and adds a σ of
+     *  kAmbiguityScale · distance · w: a frame with two comparable candidates says so with a σ
+     *  that reaches the other one instead of a confident value that may be the wrong one, and
+     *  a clean path stays sharp. Constants chosen on the development rooms only. */
+    double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R, double quality)
     {
-        constexpr double kAmbiguityFloor = 0.35, kAmbiguityScale = 0.5;
+        constexpr double kMargin = 0.5, kAmbiguityScale = 0.5;
         qf_.evaluate(R, ambSpec_);
         const double pTheta = fastGroupedForm(theta, R);
         const double pMax = std::max(ambSpec_.maxCoeff(), pTheta);
         if (!(pMax > 0)) return 0;
         const double beam = beamwidth();
+        const double spread =
+            std::max(kMargin * 2 * std::sqrt(std::clamp(1 - quality, 0.0, 1.0)), 1e-3);
         double sigma = 0;
         for (size_t i : findPeaks1D(ambSpec_, grid_.circular, 6))
         {
             const double d = foldedDistance(theta, grid_.angles[i]);
             if (d < beam) continue;
             const double rho = ambSpec_[Eigen::Index(i)] / pMax;
-            const double w =
-                std::clamp((rho - kAmbiguityFloor) / (1 - kAmbiguityFloor), 0.0, 1.0);
+            const double w = std::clamp(1 - (1 - rho) / spread, 0.0, 1.0);
             sigma = std::max(sigma, kAmbiguityScale * d * w);
         }
         return sigma;
