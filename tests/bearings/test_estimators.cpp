@@ -53,7 +53,8 @@ double resolvedError(const BearingResult& r, double truth)
 TEST(BearingEstimators, NamesAndOptions)
 {
     const auto names = estimatorNames();
-    EXPECT_EQ(names.size(), 7u);
+    EXPECT_EQ(names.size(), 8u);
+    EXPECT_EQ(names.front(), "default");
     for (const auto& n : names)
     {
         auto e = createEstimator(n);
@@ -99,7 +100,9 @@ TEST(BearingEstimators, EveryEstimatorFindsOneCleanPathOnTheLinearArray)
             EXPECT_NEAR(r.aoaMirror_rad, wrapAngle(M_PI - r.aoa_rad), 1e-9) << algo;
             EXPECT_GT(r.quality, 0.5) << algo << " at " << deg;
             EXPECT_GT(r.aoaStd_rad, 0.0) << algo;
-            EXPECT_LT(r.aoaStd_rad, 10 * kDeg) << algo;
+            // At 70° the other endfire fits within 3 % of the power (26 mm spacing ≈ λ/2):
+            // σ widens to say so, without losing the estimate.
+            EXPECT_LT(r.aoaStd_rad, (std::abs(deg) < 65 ? 10 : 30) * kDeg) << algo << " at " << deg;
         }
 }
 
