@@ -5,9 +5,9 @@
  * mrpt_wifi::CObservationWiFiBearing, mrpt::obs::CObservationBearingRange and (optionally)
  * CObservationImage pictures; optionally a CSV and PNG files. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
-#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/datetime.h>
@@ -163,8 +163,9 @@ int main(int argc, char** argv)
             TCLAP::UnlabeledValueArg<std::string> argOut(
                 "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
             TCLAP::ValueArg<std::string> argAlgo(
-                "a", "algo", "Estimator: " + algoList + " (default: 'default', the recommended one)",
-                false, "default", "NAME", cmd);
+                "a", "algo",
+                "Estimator: " + algoList + " (default: 'default', the recommended one)", false,
+                "default", "NAME", cmd);
             TCLAP::ValueArg<std::string> argOdomTum(
                 "", "odometry-tum",
                 "Robot odometry as a TUM trajectory (t x y z qx qy qz qw, same clock as the CSI), "

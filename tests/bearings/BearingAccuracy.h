@@ -330,7 +330,7 @@ struct RoomStats
     double median_deg = NAN, p90_deg = NAN, beyond30 = NAN;
     double withinTwoSigma = NAN, withinThreeSigma = NAN;
     double crbMedian_deg = NAN, meanStd_deg = NAN;
-    double medianStd_deg = NAN;     //!< reported σ, median over the estimates
+    double medianStd_deg = NAN;  //!< reported σ, median over the estimates
     double centralMedianStd_deg = NAN;
 };
 

@@ -27,8 +27,8 @@ int roomTables(
     const auto seeds = roomSeeds(evaluation, rooms);
     std::cout << std::fixed << std::setprecision(2);
     std::cout << "# AoA accuracy over " << rooms << " random rooms ("
-              << (evaluation ? "evaluation" : "development") << " seeds " << seeds.front()
-              << "–" << seeds.back() << "), " << estimatesPerRoom
+              << (evaluation ? "evaluation" : "development") << " seeds " << seeds.front() << "–"
+              << seeds.back() << "), " << estimatesPerRoom
               << " estimates per room, 8-frame windows, true receiver offsets\n\n"
               << "Error to the nearer reported mirror candidate; 'central': truth within 75° of "
                  "broadside. Coverage: share of errors within 2σ / 3σ of the reported σ. CRB: "
@@ -64,8 +64,8 @@ int roomTables(
                           << std::setprecision(2) << s.median_deg << " | " << std::setprecision(1)
                           << 100 * s.withinTwoSigma << " % | " << 100 * s.withinThreeSigma
                           << " % | " << std::setprecision(2) << s.centralMedianStd_deg << " / "
-                          << s.medianStd_deg << " | "
-                          << std::setprecision(3) << s.crbMedian_deg << " |\n"
+                          << s.medianStd_deg << " | " << std::setprecision(3) << s.crbMedian_deg
+                          << " |\n"
                           << std::flush;
             }
         }
@@ -119,9 +119,10 @@ int main(int argc, char** argv)
             windowFrames = unsigned(std::atoi(argv[++i]));
         else
         {
-            std::cerr << "usage: bearing-accuracy [--estimates N] [--quick]\n"
-                         "       bearing-accuracy --rooms N [--development] [--estimates "
-                         "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n";
+            std::cerr
+                << "usage: bearing-accuracy [--estimates N] [--quick]\n"
+                   "       bearing-accuracy --rooms N [--development] [--estimates "
+                   "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n";
             return 1;
         }
     }

@@ -1,7 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
-#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
-
 #include <mrpt/math/wrap2pi.h>
+#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include <algorithm>
 #include <cmath>

@@ -715,7 +715,7 @@ public:
             cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
             maxPower = std::max(maxPower, double(p.value));
         }
-        constexpr double kSameDelay_s = 5e-9;
+        constexpr double kSameDelay_s = 5e-9, kCleanPath = 0.97;
         double earliest = INFINITY;
         for (const auto& c : cands)
             if (c.power >= opts_.directPathPowerRatio * maxPower)
@@ -729,8 +729,10 @@ public:
         delayFilteredCovariances(frames, chosen.delay, opts_.frequencyGroups, Rd_);
         if (opts_.refine) theta = polishBartlett(theta, Rd_);
         // Super-resolution: the 2-D MUSIC peak of the same path, when there is one, separates
-        // it from the paths the matched filter blurs into it.
-        if (spotfi_.estimate(frames, ctx, spotfiResult_))
+        // it from the paths the matched filter blurs into it (only where a plane wave leaves
+        // power unexplained at that delay: a clean path needs none).
+        const double cleanness = bartlettQuality(fastGroupedForm(theta, Rd_), Rd_, rx_.size());
+        if (cleanness < kCleanPath && spotfi_.estimate(frames, ctx, spotfiResult_))
         {
             double bestD = 0.2 * beamwidth();
             for (const auto& c : spotfi_.candidates())
@@ -739,16 +741,34 @@ public:
                 if (d < bestD && std::abs(c.delay - chosen.delay) < kSameDelay_s * 2)
                 {
                     bestD = d;
-                    theta = angleDistance(theta, c.theta) <= d + 1e-9 ? c.theta
-                                                                       : rx_.mirrorOf(c.theta);
+                    theta =
+                        angleDistance(theta, c.theta) <= d + 1e-9 ? c.theta : rx_.mirrorOf(c.theta);
                 }
             }
         }
+        // The robot moves during the window: the path's bearing in the older and the newer
+        // half tells how far it drifted; the estimate (the window's mean) is moved to the
+        // newest frame and the σ covers the drift.
+        double drift = 0;
+        if (frames.size() >= 4)
+        {
+            const size_t h = frames.size() / 2;
+            halves_[0].assign(frames.begin(), frames.begin() + long(h));
+            halves_[1].assign(frames.end() - long(h), frames.end());
+            double half[2];
+            for (int k = 0; k < 2; ++k)
+            {
+                delayFilteredCovariances(halves_[k], chosen.delay, opts_.frequencyGroups, Rh_);
+                half[k] = polishBartlett(theta, Rh_);
+            }
+            drift = wrapAngle(half[1] - half[0]);
+            if (std::abs(drift) < 0.25 * beamwidth()) theta += 0.5 * drift;
+        }
         sumCovariances(frames, opts_.frequencyGroups, false, R_);
         finish(r, theta, R_, frames, &Rd_);
+        r.aoaStd_rad = std::min(std::hypot(r.aoaStd_rad, drift), M_PI / 2);
         const double nSub = double(layout_->size());
-        r.quality =
-            std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
+        r.quality = std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
         r.hasDelay = true;
         r.delay_s = chosen.delay;
         r.pathsDetected = unsigned(cands.size());
@@ -760,6 +780,8 @@ public:
 private:
     SpotFiEstimator spotfi_;
     BearingResult spotfiResult_;
+    std::vector<const CleanCsi*> halves_[2];
+    std::vector<Eigen::MatrixXcd> Rh_;
 };
 
 // =============================================================================================

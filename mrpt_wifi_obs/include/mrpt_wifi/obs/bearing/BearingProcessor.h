@@ -1,12 +1,11 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
+#include <mrpt/core/Clock.h>
+#include <mrpt/math/TPose2D.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
-
-#include <mrpt/core/Clock.h>
-#include <mrpt/math/TPose2D.h>
 
 #include <deque>
 #include <map>
