@@ -7,6 +7,7 @@
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/datetime.h>
@@ -26,6 +27,7 @@
 #include <iostream>
 #include <map>
 #include <set>
+#include <sstream>
 
 using namespace mrpt_wifi;
 namespace fs = std::filesystem;
@@ -38,6 +40,30 @@ std::string findShareFile(const std::string& relative)
         if (fs::exists(fs::path(base) / relative)) return (fs::path(base) / relative).string();
     throw std::runtime_error(
         "cannot find '" + relative + "' in the mrpt_wifi share folder; pass --array FILE");
+}
+
+/** A TUM trajectory file: (time [s], planar pose) per line, sorted by time. */
+std::vector<std::pair<double, mrpt::math::TPose2D>> readTumPoses(const std::string& path)
+{
+    std::ifstream f(path);
+    if (!f) throw std::runtime_error("cannot open odometry file '" + path + "'");
+    std::vector<std::pair<double, mrpt::math::TPose2D>> out;
+    std::string line;
+    for (int n = 1; std::getline(f, line); ++n)
+    {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream is(line);
+        double t, x, y, z, qx, qy, qz, qw;
+        if (!(is >> t >> x >> y >> z >> qx >> qy >> qz >> qw))
+            throw std::runtime_error(
+                path + ":" + std::to_string(n) + ": expected 't x y z qx qy qz qw'");
+        const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
+        if (!out.empty() && t < out.back().first)
+            throw std::runtime_error(path + ":" + std::to_string(n) + ": time goes backwards");
+        out.emplace_back(t, mrpt::math::TPose2D(x, y, yaw));
+    }
+    if (out.empty()) throw std::runtime_error("odometry file '" + path + "' holds no pose");
+    return out;
 }
 
 double median(std::vector<double> v)
@@ -82,7 +108,15 @@ int main(int argc, char** argv)
             TCLAP::UnlabeledValueArg<std::string> argOut(
                 "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
             TCLAP::ValueArg<std::string> argAlgo(
-                "a", "algo", "Estimator: " + algoList, false, "aoa_only", "NAME", cmd);
+                "a", "algo",
+                "Estimator: " + algoList + " (default: 'default', the recommended one)", false,
+                "default", "NAME", cmd);
+            TCLAP::ValueArg<std::string> argOdomTum(
+                "", "odometry-tum",
+                "Robot odometry as a TUM trajectory (t x y z qx qy qz qw, same clock as the CSI), "
+                "for rawlogs without CObservationOdometry (replaces the rawlog's odometry). With "
+                "odometry each window combines only frames taken while the robot moved little",
+                false, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argCalib(
                 "c", "calib",
                 "Phase calibration: a file (one channel) or a folder "
@@ -169,6 +203,11 @@ int main(int argc, char** argv)
                         AntennaArray::fromYamlFile(t.substr(eq + 1)));
             }
 
+            std::vector<std::pair<double, mrpt::math::TPose2D>> tumOdometry;
+            if (argOdomTum.isSet()) tumOdometry = readTumPoses(argOdomTum.getValue());
+            size_t nextTum = 0;
+            uint64_t odometryUsed = 0;
+
             // ---- pre-scan: channels and antenna counts must fit the array and calibration
             cli::Progress progress("csi-bearings", !argQuiet.getValue());
             std::set<std::pair<uint16_t, unsigned>> shapes;
@@ -223,10 +262,26 @@ int main(int argc, char** argv)
             const double toDeg = 180.0 / M_PI;
 
             // Returns what to add after one CSI observation.
+            const auto handleOdometry = [&](const mrpt::obs::CObservation::Ptr& o)
+            {
+                if (argOdomTum.isSet()) return;
+                if (auto od = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o))
+                {
+                    processor.addOdometry(od->timestamp, od->odometry.asTPose());
+                    ++odometryUsed;
+                }
+            };
             const auto handle =
                 [&](const CObservationWiFiCSI& c, std::vector<mrpt::obs::CObservation::Ptr>& extra)
             {
                 ++csiSeen;
+                // TUM odometry: everything up to a little after this frame.
+                const double tc = mrpt::Clock::toDouble(c.timestamp);
+                for (; nextTum < tumOdometry.size() && tumOdometry[nextTum].first <= tc + 0.1;
+                     ++nextTum, ++odometryUsed)
+                    processor.addOdometry(
+                        mrpt::Clock::fromDouble(tumOdometry[nextTum].first),
+                        tumOdometry[nextTum].second);
                 auto& st = stats[c.transmitter];
                 ++st.frames;
                 RejectReason why;
@@ -291,17 +346,22 @@ int main(int argc, char** argv)
                         // Sensory-frame rawlogs: the new observations join the same frame.
                         std::vector<mrpt::obs::CObservation::Ptr> added;
                         for (const auto& o : *sf)
+                        {
+                            handleOdometry(o);
                             if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
                             {
                                 extra.clear();
                                 handle(*c, extra);
                                 added.insert(added.end(), extra.begin(), extra.end());
                             }
+                        }
                         for (auto& a : added) sf->insert(a);
                         archive << *sf;
                         return;
                     }
                     archive << *obj;
+                    if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj))
+                        handleOdometry(o);
                     if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
                     {
                         extra.clear();
@@ -325,6 +385,12 @@ int main(int argc, char** argv)
                       << "Calib : " << (calib.empty() ? "none (uncalibrated)" : calib.path())
                       << "\n"
                       << "Algo  : " << algo << "\n"
+                      << "Odometry: "
+                      << (odometryUsed == 0 ? std::string("none (windows by age only)")
+                                            : std::to_string(odometryUsed) + " poses from " +
+                                                  (argOdomTum.isSet() ? argOdomTum.getValue()
+                                                                      : std::string("the rawlog")))
+                      << "\n"
                       << "Output: " << argOut.getValue() << " (" << bearingsTotal << " bearings)\n";
             std::cout << "Bearings per transmitter:\n"
                       << "  transmitter        frames  bearings  median AoA[deg]  median quality\n";

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+#include <mrpt_wifi/sim/RandomRoom.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
 #include <algorithm>
@@ -80,9 +81,23 @@ inline PhaseCalibration truthCalibration(
     return cal;
 }
 
+inline AccuracyDataset makeDataset(const AccuracyCase& c, sim::Scenario sc);
+
 inline AccuracyDataset makeDataset(const AccuracyCase& c)
 {
-    sim::Scenario sc = sim::Scenario::fromYamlFile(c.scenarioFile);
+    return makeDataset(c, sim::Scenario::fromYamlFile(c.scenarioFile));
+}
+
+/** A case on random room `seed` (mrpt_wifi::sim::randomRoomScenario). */
+inline AccuracyDataset makeRandomRoomDataset(const AccuracyCase& c, uint32_t seed)
+{
+    sim::RandomRoomOptions ro;
+    ro.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
+    return makeDataset(c, sim::randomRoomScenario(seed, ro));
+}
+
+inline AccuracyDataset makeDataset(const AccuracyCase& c, sim::Scenario sc)
+{
     if (!c.rxArrayFile.empty()) sc.receiver.array = sim::AntennaArray::fromYamlFile(c.rxArrayFile);
     sc.impairments.fixedSnr_dB = c.snr_dB;
     if (c.environment == Environment::LineOfSight)
@@ -90,6 +105,7 @@ inline AccuracyDataset makeDataset(const AccuracyCase& c)
         sc.propagation.maxReflectionOrder = 0;
         sc.scatterers.clear();
         sc.obstacles.clear();
+        sc.receiver.bodyShadow.attenuation_dB = 0;
     }
     else if (c.environment == Environment::Strong)
     {
@@ -236,6 +252,132 @@ inline AccuracyStats evaluate(
     s.meanQuality = quality.empty() ? NAN : qs / double(quality.size());
     s.meanStd_deg = stds.empty() ? NAN : ss / double(stds.size());
     s.withinThreeSigma = errors.empty() ? NAN : double(inside) / double(errors.size());
+    return s;
+}
+
+/** One estimate against the truth. */
+struct ErrorRecord
+{
+    double error_deg = NAN;  //!< to the nearer reported candidate
+    double std_deg = NAN;    //!< reported σ
+    double crb_deg = NAN;
+    bool central = false;  //!< truth within 75° of broadside
+};
+
+/** Runs an estimator over a dataset and appends one record per estimate it made; returns the
+ *  number of windows it produced nothing for. */
+inline size_t collectErrors(
+    const AccuracyDataset& d, const std::string& algo, std::vector<ErrorRecord>& out,
+    const mrpt::containers::yaml& params = mrpt::containers::yaml())
+{
+    auto est = bearing::createEstimator(algo, params);
+    CsiPreprocessor pre(
+        {}, d.rx,
+        d.calibration ? CalibrationStore::fromCalibration(*d.calibration) : CalibrationStore());
+    std::vector<CleanCsi> clean;
+    std::vector<const CleanCsi*> ptrs;
+    bearing::EstimatorContext ctx;
+    ctx.rxArray = &d.rx;
+    ctx.txArrayOf = [&](const MacAddress& m) -> const AntennaArray*
+    {
+        const auto it = d.txArrays.find(m);
+        return it == d.txArrays.end() ? nullptr : &it->second;
+    };
+    size_t missing = 0;
+    for (size_t e = 0; e < d.windows.size(); ++e)
+    {
+        const auto& w = d.windows[e];
+        const size_t use = std::min<size_t>(est->framesWanted(), w.size());
+        clean.resize(use);
+        ptrs.clear();
+        for (size_t n = 0; n < use; ++n)
+        {
+            if (pre.process(w[w.size() - use + n], clean[n]) != RejectReason::Accepted) continue;
+            ptrs.push_back(&clean[n]);
+        }
+        bearing::BearingResult r;
+        if (ptrs.empty() || !est->estimate(ptrs, ctx, r) || !r.valid)
+        {
+            ++missing;
+            continue;
+        }
+        const auto& truth = d.truth[e];
+        double err = angleDistance(r.aoa_rad, truth.aoa_rad);
+        if (r.aoaAmbiguous) err = std::min(err, angleDistance(r.aoaMirror_rad, truth.aoa_rad));
+        double streams = 0;
+        for (const auto* p : ptrs) streams += p->nTx;
+        ErrorRecord rec;
+        rec.error_deg = err * 180 / M_PI;
+        rec.std_deg = r.aoaStd_rad * 180 / M_PI;
+        rec.crb_deg = d.rx.aoaCramerRaoBound(
+                          truth.aoa_rad, ptrs.back()->layout->frequencies_Hz,
+                          std::pow(10.0, d.snr_dB / 10), streams) *
+                      180 / M_PI;
+        const double offBroadside = std::min(
+            angleDistance(truth.aoa_rad, d.rx.broadside()),
+            angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
+        rec.central = offBroadside <= 75 * M_PI / 180;
+        out.push_back(rec);
+    }
+    return missing;
+}
+
+/** The issue-10 figures over many rooms. */
+struct RoomStats
+{
+    size_t count = 0, centralCount = 0;
+    double centralMedian_deg = NAN, centralP90_deg = NAN, centralBeyond30 = NAN;
+    double median_deg = NAN, p90_deg = NAN, beyond30 = NAN;
+    double withinTwoSigma = NAN, withinThreeSigma = NAN;
+    double crbMedian_deg = NAN, meanStd_deg = NAN;
+    double medianStd_deg = NAN;  //!< reported σ, median over the estimates
+    double centralMedianStd_deg = NAN;
+};
+
+inline RoomStats summarize(const std::vector<ErrorRecord>& recs)
+{
+    RoomStats s;
+    std::vector<double> all, central, crb, sigmas, centralSigmas;
+    size_t beyond = 0, cBeyond = 0, in2 = 0, in3 = 0;
+    double stdSum = 0;
+    for (const auto& r : recs)
+    {
+        all.push_back(r.error_deg);
+        crb.push_back(r.crb_deg);
+        stdSum += r.std_deg;
+        sigmas.push_back(r.std_deg);
+        if (r.central) centralSigmas.push_back(r.std_deg);
+        beyond += r.error_deg > 30;
+        in2 += r.error_deg <= 2 * r.std_deg;
+        in3 += r.error_deg <= 3 * r.std_deg;
+        if (!r.central) continue;
+        central.push_back(r.error_deg);
+        cBeyond += r.error_deg > 30;
+    }
+    s.count = all.size();
+    s.centralCount = central.size();
+    if (all.empty()) return s;
+    s.median_deg = percentile(all, 0.5);
+    s.p90_deg = percentile(all, 0.9);
+    s.beyond30 = double(beyond) / double(all.size());
+    s.centralMedian_deg = percentile(central, 0.5);
+    s.centralP90_deg = percentile(central, 0.9);
+    s.centralBeyond30 = central.empty() ? NAN : double(cBeyond) / double(central.size());
+    s.withinTwoSigma = double(in2) / double(all.size());
+    s.withinThreeSigma = double(in3) / double(all.size());
+    s.crbMedian_deg = percentile(crb, 0.5);
+    s.meanStd_deg = stdSum / double(all.size());
+    s.medianStd_deg = percentile(sigmas, 0.5);
+    s.centralMedianStd_deg = percentile(centralSigmas, 0.5);
+    return s;
+}
+
+/** Seeds of the rooms: `count` consecutive seeds from the development or evaluation set. */
+inline std::vector<uint32_t> roomSeeds(bool evaluation, unsigned count, unsigned offset = 0)
+{
+    std::vector<uint32_t> s;
+    const uint32_t first = (evaluation ? sim::kFirstEvaluationSeed : 1u) + offset;
+    for (unsigned i = 0; i < count; ++i) s.push_back(first + i);
     return s;
 }
 

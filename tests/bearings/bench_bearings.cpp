@@ -143,4 +143,10 @@ static void BM_Esprit(benchmark::State& s)
 }
 BENCHMARK(BM_Esprit)->Unit(benchmark::kMicrosecond);
 
+void BM_Default8(benchmark::State& s)
+{
+    runEstimator(s, "default", "", 8);
+}
+BENCHMARK(BM_Default8)->Unit(benchmark::kMicrosecond);
+
 BENCHMARK_MAIN();

@@ -99,3 +99,53 @@ TEST(BearingAccuracy, AngleOfDepartureOnTheKidnappedScenario)
     EXPECT_LE(los.aodMedian_deg, 0.5);
     EXPECT_LE(mp.aodMedian_deg, 5.0);
 }
+
+// ---- Random rooms, evaluation seeds (never tuned on): honest σ and the default estimator.
+namespace
+{
+std::vector<ErrorRecord> roomErrors(
+    const std::string& algo, Environment env, double snr, unsigned rooms = 2)
+{
+    std::vector<ErrorRecord> recs;
+    for (uint32_t seed : roomSeeds(true, rooms))
+    {
+        AccuracyCase c;
+        c.environment = env;
+        c.snr_dB = snr;
+        c.estimates = 90;
+        collectErrors(makeRandomRoomDataset(c, seed), algo, recs);
+    }
+    return recs;
+}
+}  // namespace
+
+TEST(BearingAccuracyRooms, ReportedSigmaPredictsTheError)
+{
+    for (Environment env : {Environment::LineOfSight, Environment::Moderate})
+        for (double snr : {10.0, 30.0})
+            for (const char* algo : {"default", "fft", "spotfi", "aoa_only"})
+            {
+                const RoomStats s = summarize(roomErrors(algo, env, snr));
+                std::cout << algo << " " << toString(env) << " " << snr << " dB: ≤2σ "
+                          << s.withinTwoSigma << " ≤3σ " << s.withinThreeSigma << " median σ "
+                          << s.medianStd_deg << "\n";
+                ASSERT_GE(s.count, 170u) << algo;
+                EXPECT_GE(s.withinThreeSigma, 0.95) << algo << " " << toString(env) << " " << snr;
+                EXPECT_GE(s.withinTwoSigma, 0.80) << algo << " " << toString(env) << " " << snr;
+            }
+}
+
+TEST(BearingAccuracyRooms, DefaultEstimatorBeatsTheMatchedFilterInMultipath)
+{
+    const RoomStats d = summarize(roomErrors("default", Environment::Moderate, 25, 3));
+    const RoomStats f = summarize(roomErrors("fft", Environment::Moderate, 25, 3));
+    std::cout << "default: median " << d.centralMedian_deg << " p90 " << d.centralP90_deg
+              << " >30° " << d.centralBeyond30 << " (all " << d.beyond30 << ")\nfft: median "
+              << f.centralMedian_deg << " p90 " << f.centralP90_deg << " >30° " << f.centralBeyond30
+              << " (all " << f.beyond30 << ")\n";
+    EXPECT_LE(d.centralMedian_deg, 1.5);
+    EXPECT_LE(d.centralP90_deg, 8.0);
+    EXPECT_LT(d.centralMedian_deg, f.centralMedian_deg);
+    EXPECT_LE(d.centralBeyond30, f.centralBeyond30);
+    EXPECT_LE(d.beyond30, 0.10);
+}

@@ -12,6 +12,7 @@
 #include <mrpt_wifi/sim/Simulator.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "TestSupport.h"
@@ -167,4 +168,43 @@ TEST(BearingApp, ArrayNotMatchingTheCsiFailsBeforeWork)
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("4 receive chains"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(tmp.file("o.rawlog")));
+}
+
+TEST(BearingApp, DefaultEstimatorAndOdometry)
+{
+    test::TempDir tmp;
+    // Without --algo: the recommended estimator, with the rawlog's odometry.
+    const auto r = test::run(
+        program() + " " + simulatedRawlog() + " " + tmp.file("a.rawlog") + " --csv " +
+        tmp.file("a.csv") + " -q");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("Algo  : default"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("poses from the rawlog"), std::string::npos) << r.output;
+    EXPECT_NE(test::readFile(tmp.file("a.csv")).find(",default,"), std::string::npos);
+
+    // A TUM file instead (same clock).
+    const std::string tum = tmp.file("odo.txt");
+    {
+        std::ofstream f(tum);
+        f << "# t x y z qx qy qz qw\n";
+        for (int i = 0; i <= 40; ++i)
+            f << std::fixed << 1700000000.0 + 0.05 * i << " " << 0.01 * i << " 0 0 0 0 0 1\n";
+    }
+    const auto t = test::run(
+        program() + " " + simulatedRawlog() + " " + tmp.file("b.rawlog") + " --odometry-tum " +
+        tum + " -q");
+    ASSERT_EQ(t.exitCode, 0) << t.output;
+    EXPECT_NE(t.output.find("41 poses from " + tum), std::string::npos) << t.output;
+
+    // A broken TUM file is refused, naming file and line, before any output is written.
+    {
+        std::ofstream f(tmp.file("bad.txt"));
+        f << "1700000000 1 2\n";
+    }
+    const auto bad = test::run(
+        program() + " " + simulatedRawlog() + " " + tmp.file("c.rawlog") + " --odometry-tum " +
+        tmp.file("bad.txt") + " -q");
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.output.find("bad.txt:1"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(tmp.file("c.rawlog")));
 }

@@ -53,7 +53,8 @@ double resolvedError(const BearingResult& r, double truth)
 TEST(BearingEstimators, NamesAndOptions)
 {
     const auto names = estimatorNames();
-    EXPECT_EQ(names.size(), 7u);
+    EXPECT_EQ(names.size(), 8u);
+    EXPECT_EQ(names.front(), "default");
     for (const auto& n : names)
     {
         auto e = createEstimator(n);
@@ -99,7 +100,9 @@ TEST(BearingEstimators, EveryEstimatorFindsOneCleanPathOnTheLinearArray)
             EXPECT_NEAR(r.aoaMirror_rad, wrapAngle(M_PI - r.aoa_rad), 1e-9) << algo;
             EXPECT_GT(r.quality, 0.5) << algo << " at " << deg;
             EXPECT_GT(r.aoaStd_rad, 0.0) << algo;
-            EXPECT_LT(r.aoaStd_rad, 10 * kDeg) << algo;
+            // At 70° the other endfire fits within 3 % of the power (26 mm spacing ≈ λ/2):
+            // σ widens to say so, without losing the estimate.
+            EXPECT_LT(r.aoaStd_rad, (std::abs(deg) < 65 ? 10 : 30) * kDeg) << algo << " at " << deg;
         }
 }
 
@@ -251,4 +254,48 @@ TEST(BearingProcessorChain, ProducesBearingObservationsAndPictures)
     const auto csiImg = renderMagnitudePhase(*proc.lastFrame());
     EXPECT_GT(csiImg.getHeight(), 400u);
     EXPECT_EQ(asImageObservation(img, last->timestamp, "P")->image.getWidth(), img.getWidth());
+}
+
+TEST(BearingProcessorChain, OdometryLimitsTheWindowToFramesWithTheSameGeometry)
+{
+    test::SyntheticSpec s;
+    s.rx = test::loadArray("rt-ac86u");
+    s.snr_dB = 25;
+    s.paths = {{20 * kDeg, 0, 12e-9, {1, 0}}};
+    const auto runChain = [&](bool withOdometry, double turnRate_radps)
+    {
+        BearingProcessor proc(CsiPreprocessor({}, s.rx), createEstimator("default"), {});
+        EXPECT_EQ(proc.estimator().framesWanted(), 8u);
+        CObservationWiFiBearing::Ptr last;
+        for (int n = 0; n < 12; ++n)
+        {
+            const double t = 1700000000.0 + 0.02 * n;
+            if (withOdometry)
+                proc.addOdometry(
+                    mrpt::Clock::fromDouble(t),
+                    mrpt::math::TPose2D(0, 0, turnRate_radps * n * 0.02));
+            auto obs = test::synthesize(s);
+            obs.timestamp = mrpt::Clock::fromDouble(t);
+            if (auto b = proc.process(obs)) last = b;
+        }
+        EXPECT_TRUE(last);
+        return last ? last->framesUsed : 0u;
+    };
+    EXPECT_EQ(runChain(false, 0), 8u);             // no odometry: the whole window
+    EXPECT_EQ(runChain(true, 0), 8u);              // standing still: the whole window
+    const unsigned turning = runChain(true, 1.0);  // 57°/s: 3° is reached in 3 frames
+    EXPECT_GE(turning, 2u);
+    EXPECT_LE(turning, 3u);
+
+    BearingProcessor proc(CsiPreprocessor({}, s.rx), createEstimator("fft"), {});
+    EXPECT_FALSE(proc.hasOdometry());
+    EXPECT_FALSE(proc.odometryAt(mrpt::Clock::fromDouble(10)));
+    proc.addOdometry(mrpt::Clock::fromDouble(10), {0, 0, 0});
+    proc.addOdometry(mrpt::Clock::fromDouble(11), {1, 2, 0.5});
+    const auto mid = proc.odometryAt(mrpt::Clock::fromDouble(10.5));
+    ASSERT_TRUE(mid);
+    EXPECT_NEAR(mid->x, 0.5, 1e-6);
+    EXPECT_NEAR(mid->y, 1.0, 1e-6);
+    EXPECT_NEAR(mid->phi, 0.25, 1e-6);
+    EXPECT_FALSE(proc.odometryAt(mrpt::Clock::fromDouble(12)));  // beyond what is known
 }

@@ -208,3 +208,21 @@ TEST(WifiSimApp, BadScenarioWritesNothing)
     EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos);
     mrpt::system::deleteFilesInDirectory(dir, true);
 }
+
+TEST(WifiSimApp, RandomRoom)
+{
+    const std::string dir = tempDir("random_room");
+    const auto r =
+        run("--random-room 1001 " + dir + "/r.rawlog -d 3 -q --write-scenario " + dir + "/r.yaml");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("random-room-1001"), std::string::npos) << r.output;
+    EXPECT_GT(readRawlog(dir + "/r.rawlog").size(), 100u);
+    // The saved room is an ordinary scenario file giving the same recording.
+    const auto again = run(dir + "/r.yaml " + dir + "/r2.rawlog -d 3 -q");
+    ASSERT_EQ(again.exitCode, 0) << again.output;
+    EXPECT_EQ(readRawlog(dir + "/r2.rawlog").size(), readRawlog(dir + "/r.rawlog").size());
+    // Misuse is refused.
+    EXPECT_NE(run("--random-room 1001 a.yaml " + dir + "/x.rawlog").exitCode, 0);
+    EXPECT_NE(run("--random-room 0 " + dir + "/x.rawlog").exitCode, 0);
+    EXPECT_NE(run("--write-scenario x.yaml a.yaml " + dir + "/x.rawlog").exitCode, 0);
+}

@@ -1,7 +1,9 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace mrpt_wifi::bearing
 {
@@ -32,6 +34,54 @@ const AntennaArray* BearingProcessor::txArrayOf(const MacAddress& mac) const
     return defaultTxArray_ ? &*defaultTxArray_ : nullptr;
 }
 
+void BearingProcessor::addOdometry(mrpt::Clock::time_point t, const mrpt::math::TPose2D& odometry)
+{
+    const double ts = mrpt::Clock::toDouble(t);
+    if (!odometry_.empty() && ts < odometry_.back().first)
+        odometry_.clear();  // time went backwards (a new recording): start over
+    odometry_.emplace_back(ts, odometry);
+    while (odometry_.size() > 2 && odometry_.front().first < ts - opts_.odometryHistory_s)
+        odometry_.pop_front();
+}
+
+std::optional<mrpt::math::TPose2D> BearingProcessor::odometryAt(mrpt::Clock::time_point t) const
+{
+    constexpr double kSlack_s = 0.25;
+    if (odometry_.empty()) return std::nullopt;
+    const double ts = mrpt::Clock::toDouble(t);
+    if (ts < odometry_.front().first - kSlack_s || ts > odometry_.back().first + kSlack_s)
+        return std::nullopt;
+    const auto it = std::lower_bound(
+        odometry_.begin(), odometry_.end(), ts,
+        [](const std::pair<double, mrpt::math::TPose2D>& a, double v) { return a.first < v; });
+    if (it == odometry_.begin()) return it->second;
+    if (it == odometry_.end()) return odometry_.back().second;
+    const auto& [ta, a] = *(it - 1);
+    const auto& [tb, b] = *it;
+    const double f = tb > ta ? (ts - ta) / (tb - ta) : 0.0;
+    return mrpt::math::TPose2D(
+        a.x + f * (b.x - a.x), a.y + f * (b.y - a.y),
+        mrpt::math::wrapToPi(a.phi + f * mrpt::math::wrapToPi(b.phi - a.phi)));
+}
+
+void BearingProcessor::limitWindowByMotion()
+{
+    if (odometry_.empty() || frames_.size() < 2) return;
+    const auto ref = odometryAt(frames_.back()->timestamp);
+    if (!ref) return;
+    size_t keepFrom = frames_.size() - 1;
+    while (keepFrom > 0)
+    {
+        const auto p = odometryAt(frames_[keepFrom - 1]->timestamp);
+        if (!p) break;
+        const double moved = std::hypot(p->x - ref->x, p->y - ref->y);
+        const double turned = std::abs(mrpt::math::wrapToPi(p->phi - ref->phi));
+        if (moved > opts_.maxWindowTranslation_m || turned > opts_.maxWindowRotation_rad) break;
+        --keepFrom;
+    }
+    frames_.erase(frames_.begin(), frames_.begin() + long(keepFrom));
+}
+
 CObservationWiFiBearing::Ptr BearingProcessor::process(
     const CObservationWiFiCSI& csi, RejectReason* reason)
 {
@@ -50,6 +100,7 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     since = 0;
 
     window.recent(est_->framesWanted(), frames_);
+    limitWindowByMotion();
     EstimatorContext ctx;
     ctx.rxArray = &pre_.rxArray();
     ctx.txArrayOf = [this](const MacAddress& m) { return txArrayOf(m); };

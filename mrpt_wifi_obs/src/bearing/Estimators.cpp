@@ -158,9 +158,12 @@ protected:
         return total;
     }
 
+    /** Quality, σ and the mirror pair of a bearing; `ambiguityR`: the covariance whose
+     *  other directions count as ambiguity (default: R). */
     void finish(
         BearingResult& r, double theta, const std::vector<Eigen::MatrixXcd>& R,
-        const std::vector<const CleanCsi*>& frames)
+        const std::vector<const CleanCsi*>& frames,
+        const std::vector<Eigen::MatrixXcd>* ambiguityR = nullptr)
     {
         const size_t n = rx_.size();
         const double power = fastGroupedForm(theta, R);
@@ -168,9 +171,59 @@ protected:
         const double sd = bearingStd(
             rx_, n, theta, R, gf_, gc_, snapshotsPerSubcarrier(frames), r.quality,
             opts_.stdFloor_deg * M_PI / 180);
-        setAoa(r, rx_, theta, sd);
+        const double amb = ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality);
+        setAoa(r, rx_, theta, std::min(std::sqrt(sd * sd + amb * amb), M_PI / 2));
         r.framesUsed = unsigned(frames.size());
         r.valid = true;
+    }
+
+    /** Distance between two bearings, up to the mirror of a linear array. */
+    double foldedDistance(double a, double b) const
+    {
+        const double d = angleDistance(a, b);
+        return grid_.circular ? d : std::min(d, angleDistance(rx_.mirrorOf(a), b));
+    }
+
+    /** How far the window's CSI also supports other directions: every local maximum of the
+     *  wideband Bartlett spectrum (the grid's ends included, so the other endfire, where the
+     *  rt-ac86u's 26 mm spacing aliases, counts) at least a beamwidth from the chosen bearing
+     *  is a candidate. Power the chosen plane wave leaves unexplained (1 − quality) can move
+     *  the two peaks' powers by about 2√(1 − q) of the total, so a candidate with relative power
+     *  ρ is ambiguous by w = clamp(1 − (1 − ρ) / (kMargin · 2√(1 − q)), 0, 1) and adds a σ of
+     *  kAmbiguityScale · distance · w: a frame with two comparable candidates says so with a σ
+     *  that reaches the other one instead of a confident value that may be the wrong one, and
+     *  a clean path stays sharp. Constants chosen on the development rooms only. */
+    double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R, double quality)
+    {
+        constexpr double kMargin = 0.5, kAmbiguityScale = 0.5;
+        qf_.evaluate(R, ambSpec_);
+        const double pTheta = fastGroupedForm(theta, R);
+        const double pMax = std::max(ambSpec_.maxCoeff(), pTheta);
+        if (!(pMax > 0)) return 0;
+        const double beam = beamwidth();
+        const double spread =
+            std::max(kMargin * 2 * std::sqrt(std::clamp(1 - quality, 0.0, 1.0)), 1e-3);
+        double sigma = 0;
+        for (size_t i : findPeaks1D(ambSpec_, grid_.circular, 6))
+        {
+            const double d = foldedDistance(theta, grid_.angles[i]);
+            if (d < beam) continue;
+            const double rho = ambSpec_[Eigen::Index(i)] / pMax;
+            const double w = std::clamp(1 - (1 - rho) / spread, 0.0, 1.0);
+            sigma = std::max(sigma, kAmbiguityScale * d * w);
+        }
+        return sigma;
+    }
+
+    /** Half-power beamwidth of the receive array at the band centre [rad]. */
+    double beamwidth() const
+    {
+        double aperture = 0;
+        for (size_t i = 0; i < rx_.size(); ++i)
+            for (size_t j = i + 1; j < rx_.size(); ++j)
+                aperture = std::max(aperture, (rx_.elements[i] - rx_.elements[j]).norm());
+        const double fc = layout_ ? layout_->centerFrequency_Hz : 5.5e9;
+        return aperture > 0 ? std::min(0.886 * kSpeedOfLightMps / fc / aperture, M_PI) : M_PI;
     }
 
     void keep1D(const Eigen::VectorXd& spectrum, const std::string& label, double peak)
@@ -197,7 +250,7 @@ protected:
     QuadraticFormGrid qf_;
     std::shared_ptr<const SubcarrierLayout> layout_;
     std::vector<Eigen::MatrixXcd> R_, Rd_;
-    Eigen::VectorXd spec_;
+    Eigen::VectorXd spec_, ambSpec_;
 };
 
 // =============================================================================================
@@ -511,11 +564,8 @@ public:
         pseudo_ = (norm2 - proj_.array()).cwiseMax(1e-6f * norm2).inverse().matrix();
 
         const auto peaks = findPeaks2D(pseudo_, grid_.circular, K);
-        struct Candidate
-        {
-            double theta, delay, power;
-        };
-        std::vector<Candidate> cands;
+        std::vector<Candidate>& cands = cands_;
+        cands.clear();
         double maxPower = 0;
         const Eigen::MatrixXcd RsD = Rs_.cast<std::complex<double>>();
         for (const auto& p0 : peaks)
@@ -591,7 +641,16 @@ protected:
                   .cast<std::complex<float>>();
     }
 
-private:
+public:
+    struct Candidate
+    {
+        double theta, delay, power;
+    };
+    /** The 2-D MUSIC peaks of the last estimate (bearing, delay, Bartlett power). */
+    const std::vector<Candidate>& candidates() const { return cands_; }
+
+protected:
+    std::vector<Candidate> cands_;
     double step_ = 4;
     unsigned Ls_ = 16;
     std::vector<int> gridK_;
@@ -600,6 +659,129 @@ private:
     Eigen::MatrixXcf U_, Xs_, Rs_, Ej_, Dm_, At_, B_, C_;
     Eigen::MatrixXf proj_, pseudo_;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> esS_;
+};
+
+// =============================================================================================
+/** (0) The recommended default: the 2-D bearing × delay profile of an 8-frame window (frames
+ *  combined while the robot moves decorrelate the reflections), SpotFi's delay rule done on the
+ *  robust matched-filter profile (among the peaks with at least `direct_path_power_ratio` of the
+ *  strongest one's power, the earliest delay is the direct path; peaks within 5 ns of it, which
+ *  the band can't separate, go to the strongest), the bearing polished with per-sub-band
+ *  wavelengths on the CSI matched to that delay, and a σ that includes what the same delay
+ *  also supports (the other endfire, a path the band can't separate). */
+class DefaultEstimator : public ProfileEstimator
+{
+public:
+    DefaultEstimator()
+    {
+        opts_.window = 8;
+        opts_.directPathPowerRatio = 0.5;
+    }
+    std::string name() const override { return "default"; }
+    std::string description() const override
+    {
+        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma";
+    }
+    std::vector<std::string> parameterKeys() const override
+    {
+        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio"});
+    }
+
+    bool estimate(
+        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx,
+        BearingResult& r) override
+    {
+        r = BearingResult();
+        if (!prepare(frames, ctx)) return false;
+        profile2d_.reset();
+        double energy = 0;
+        for (const auto* f : frames)
+        {
+            profile2d_.accumulate(f->H, f->nTx);
+            energy += f->H.squaredNorm();
+        }
+        const Eigen::MatrixXf& P = profile2d_.power();
+        const auto peaks = findPeaks2D(P, grid_.circular, 4);
+        if (peaks.empty()) return false;
+        struct Candidate
+        {
+            double theta, delay, power;
+        };
+        std::vector<Candidate> cands;
+        double maxPower = 0;
+        for (const auto& p0 : peaks)
+        {
+            const Peak2D p = refinePeak2D(P, p0.i, p0.j, grid_.circular);
+            cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
+            maxPower = std::max(maxPower, double(p.value));
+        }
+        constexpr double kSameDelay_s = 5e-9, kCleanPath = 0.97;
+        double earliest = INFINITY;
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower)
+                earliest = std::min(earliest, c.delay);
+        Candidate chosen{0, 0, -1};
+        for (const auto& c : cands)
+            if (c.power >= opts_.directPathPowerRatio * maxPower &&
+                c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
+                chosen = c;
+        double theta = chosen.theta;
+        delayFilteredCovariances(frames, chosen.delay, opts_.frequencyGroups, Rd_);
+        if (opts_.refine) theta = polishBartlett(theta, Rd_);
+        // Super-resolution: the 2-D MUSIC peak of the same path, when there is one, separates
+        // it from the paths the matched filter blurs into it (only where a plane wave leaves
+        // power unexplained at that delay: a clean path needs none).
+        const double cleanness = bartlettQuality(fastGroupedForm(theta, Rd_), Rd_, rx_.size());
+        if (cleanness < kCleanPath && spotfi_.estimate(frames, ctx, spotfiResult_))
+        {
+            double bestD = 0.2 * beamwidth();
+            for (const auto& c : spotfi_.candidates())
+            {
+                const double d = foldedDistance(theta, c.theta);
+                if (d < bestD && std::abs(c.delay - chosen.delay) < kSameDelay_s * 2)
+                {
+                    bestD = d;
+                    theta =
+                        angleDistance(theta, c.theta) <= d + 1e-9 ? c.theta : rx_.mirrorOf(c.theta);
+                }
+            }
+        }
+        // The robot moves during the window: the path's bearing in the older and the newer
+        // half tells how far it drifted; the estimate (the window's mean) is moved to the
+        // newest frame and the σ covers the drift.
+        double drift = 0;
+        if (frames.size() >= 4)
+        {
+            const size_t h = frames.size() / 2;
+            halves_[0].assign(frames.begin(), frames.begin() + long(h));
+            halves_[1].assign(frames.end() - long(h), frames.end());
+            double half[2];
+            for (int k = 0; k < 2; ++k)
+            {
+                delayFilteredCovariances(halves_[k], chosen.delay, opts_.frequencyGroups, Rh_);
+                half[k] = polishBartlett(theta, Rh_);
+            }
+            drift = wrapAngle(half[1] - half[0]);
+            if (std::abs(drift) < 0.25 * beamwidth()) theta += 0.5 * drift;
+        }
+        sumCovariances(frames, opts_.frequencyGroups, false, R_);
+        finish(r, theta, R_, frames, &Rd_);
+        r.aoaStd_rad = std::min(std::hypot(r.aoaStd_rad, drift), M_PI / 2);
+        const double nSub = double(layout_->size());
+        r.quality = std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
+        r.hasDelay = true;
+        r.delay_s = chosen.delay;
+        r.pathsDetected = unsigned(cands.size());
+        keep2D(P, "Bartlett power", r.aoa_rad, chosen.delay);
+        if (hasProfile_) profile_.peakAngle_rad = theta;
+        return true;
+    }
+
+private:
+    SpotFiEstimator spotfi_;
+    BearingResult spotfiResult_;
+    std::vector<const CleanCsi*> halves_[2];
+    std::vector<Eigen::MatrixXcd> Rh_;
 };
 
 // =============================================================================================
@@ -897,14 +1079,16 @@ private:
 
 std::vector<std::string> estimatorNames()
 {
-    return {"aoa_only", "fft", "svd", "music", "spotfi", "aod", "esprit"};
+    return {"default", "aoa_only", "fft", "svd", "music", "spotfi", "aod", "esprit"};
 }
 
 std::unique_ptr<BearingEstimator> createEstimator(
     const std::string& name, const mrpt::containers::yaml& params)
 {
     std::unique_ptr<BearingEstimator> e;
-    if (name == "aoa_only")
+    if (name == "default")
+        e = std::make_unique<DefaultEstimator>();
+    else if (name == "aoa_only")
         e = std::make_unique<AoaOnlyEstimator>();
     else if (name == "fft")
         e = std::make_unique<ProfileEstimator>();

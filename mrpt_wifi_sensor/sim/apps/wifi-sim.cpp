@@ -10,16 +10,32 @@
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sim/GroundTruthWriter.h>
+#include <mrpt_wifi/sim/RandomRoom.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
 using namespace mrpt_wifi;
+
+namespace
+{
+/** share/arrays of the source tree or of the installation. */
+std::string arraysDir()
+{
+    namespace fs = std::filesystem;
+    for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
+        if (fs::exists(fs::path(base) / "arrays" / "rt-ac86u.yaml"))
+            return (fs::path(base) / "arrays").string();
+    throw std::runtime_error("cannot find share/arrays/rt-ac86u.yaml for --random-room");
+}
+}  // namespace
 
 int main(int argc, char** argv)
 {
@@ -34,10 +50,17 @@ int main(int argc, char** argv)
                 "recording, optionally the Nexmon datagrams as a pcap, and the ground truth "
                 "(TUM trajectory, transmitters, per-frame AoA/AoD/delay/SNR, impairments).",
                 ' ', "0.1");
-            TCLAP::UnlabeledValueArg<std::string> argScenario(
-                "scenario", "Scenario file (YAML)", true, "", "SCENARIO.yaml", cmd);
-            TCLAP::UnlabeledValueArg<std::string> argOut(
-                "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
+            TCLAP::UnlabeledMultiArg<std::string> argFiles(
+                "files", "SCENARIO.yaml OUT.rawlog, or only OUT.rawlog with --random-room", true,
+                "[SCENARIO.yaml] OUT.rawlog", cmd);
+            TCLAP::ValueArg<uint32_t> argRandomRoom(
+                "", "random-room",
+                "Instead of a scenario file, random room number SEED (share/scenarios/README.md, "
+                "'Random rooms'; seeds < 1000 are for development, >= 1000 for evaluation)",
+                false, 0, "SEED", cmd);
+            TCLAP::ValueArg<std::string> argWriteScenario(
+                "", "write-scenario", "With --random-room: also save the room as a scenario file",
+                false, "", "FILE.yaml", cmd);
             TCLAP::ValueArg<std::string> argTruth(
                 "t", "truth-dir", "Folder for the ground truth (created if needed)", false, "",
                 "DIR", cmd);
@@ -60,7 +83,41 @@ int main(int argc, char** argv)
                 return rc;
 
             // Everything that can be wrong with the input is found before any file is created.
-            sim::Scenario scenario = sim::Scenario::fromYamlFile(argScenario.getValue());
+            const auto& files = argFiles.getValue();
+            const size_t wanted = argRandomRoom.isSet() ? 1 : 2;
+            if (files.size() != wanted)
+                throw std::invalid_argument(
+                    argRandomRoom.isSet()
+                        ? "with --random-room give only the output rawlog"
+                        : "expected SCENARIO.yaml OUT.rawlog (or --random-room SEED OUT.rawlog)");
+            if (argWriteScenario.isSet() && !argRandomRoom.isSet())
+                throw std::invalid_argument("--write-scenario needs --random-room");
+            const std::string outPath = files.back();
+            std::string scenarioName;
+            sim::Scenario scenario;
+            if (argRandomRoom.isSet())
+            {
+                if (argRandomRoom.getValue() == 0)
+                    throw std::invalid_argument("--random-room: seeds start at 1");
+                sim::RandomRoomOptions ro;
+                ro.arraysDir = arraysDir();
+                const std::string yaml = sim::randomRoomYaml(argRandomRoom.getValue(), ro);
+                scenario = sim::Scenario::fromYamlText(
+                    yaml, "random-room-" + std::to_string(argRandomRoom.getValue()));
+                scenarioName = "--random-room " + std::to_string(argRandomRoom.getValue());
+                if (argWriteScenario.isSet())
+                {
+                    std::ofstream f(argWriteScenario.getValue());
+                    if (!(f << yaml))
+                        throw std::runtime_error(
+                            "cannot write '" + argWriteScenario.getValue() + "'");
+                }
+            }
+            else
+            {
+                scenario = sim::Scenario::fromYamlFile(files.front());
+                scenarioName = files.front();
+            }
             if (argSeed.isSet()) scenario.seed = argSeed.getValue();
             if (argDuration.isSet())
             {
@@ -74,9 +131,8 @@ int main(int argc, char** argv)
 
             mrpt::io::CFileGZOutputStream out;
             std::string openError;
-            if (!out.open(argOut.getValue(), argCompression.getValue(), openError))
-                throw std::runtime_error(
-                    "cannot create rawlog '" + argOut.getValue() + "': " + openError);
+            if (!out.open(outPath, argCompression.getValue(), openError))
+                throw std::runtime_error("cannot create rawlog '" + outPath + "': " + openError);
             auto archive = mrpt::serialization::archiveFrom(out);
             std::unique_ptr<sim::GroundTruthWriter> truth;
             if (argTruth.isSet())
@@ -144,8 +200,8 @@ int main(int argc, char** argv)
             const double wall =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
             uint64_t frames = 0;
-            std::cout << "Scenario : " << sc.name << " (" << argScenario.getValue() << "), seed "
-                      << sc.seed << ", " << sc.duration_s << " s\n";
+            std::cout << "Scenario : " << sc.name << " (" << scenarioName << "), seed " << sc.seed
+                      << ", " << sc.duration_s << " s\n";
             for (size_t i = 0; i < sc.transmitters.size(); ++i)
             {
                 const auto& t = sc.transmitters[i];
@@ -157,8 +213,8 @@ int main(int argc, char** argv)
             std::cout << "Trajectory: " << std::setprecision(4)
                       << simulator.trajectory().pathLength_m() << " m driven ("
                       << toString(sc.motion.type) << ")\n"
-                      << "Rawlog   : " << argOut.getValue() << " (" << frames
-                      << " CObservationWiFiCSI, " << odometryCount << " CObservationOdometry)\n";
+                      << "Rawlog   : " << outPath << " (" << frames << " CObservationWiFiCSI, "
+                      << odometryCount << " CObservationOdometry)\n";
             if (pcap)
                 std::cout << "Pcap     : " << argPcap.getValue() << " (" << datagrams
                           << " datagrams)\n";

@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/math/geometry.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/sim/Scenario.h>
@@ -194,7 +195,8 @@ struct Reader
     ReceiverSpec receiver(const YamlNode& n) const
     {
         n.allowOnly(
-            {"label", "array", "sensor_pose", "noise_figure_db", "antenna_gain_dbi", "chip_id"});
+            {"label", "array", "sensor_pose", "noise_figure_db", "antenna_gain_dbi", "chip_id",
+             "body_shadow"});
         ReceiverSpec r;
         r.sensorLabel = n.stringOr("label", r.sensorLabel);
         r.array = array(n["array"]);
@@ -208,6 +210,13 @@ struct Reader
         r.noiseFigure_dB = n.doubleOr("noise_figure_db", r.noiseFigure_dB);
         r.antennaGain_dBi = n.doubleOr("antenna_gain_dbi", r.antennaGain_dBi);
         r.chipId = uint16_t(n.unsignedOr("chip_id", r.chipId, 0xFFFF));
+        if (auto b = n.get("body_shadow"))
+        {
+            b->allowOnly({"center_deg", "width_deg", "attenuation_db"});
+            r.bodyShadow.center_rad = b->doubleOr("center_deg", 180.0) * kDeg;
+            r.bodyShadow.halfWidth_rad = 0.5 * b->doubleOr("width_deg", 90.0) * kDeg;
+            r.bodyShadow.attenuation_dB = b->doubleOr("attenuation_db", 10.0);
+        }
         return r;
     }
 
@@ -215,7 +224,7 @@ struct Reader
     {
         n.allowOnly(
             {"type", "start", "waypoints", "speed_mps", "turn_rate_dps", "goal_tolerance_m",
-             "center", "radius_m", "time_step_s"});
+             "center", "radius_m", "time_step_s", "dwell_s"});
         MotionSpec m;
         const YamlNode type = n["type"];
         const std::string t = type.asString();
@@ -244,6 +253,7 @@ struct Reader
         if (auto c = n.get("center")) m.randomWalkCenter = c->asPoint2D();
         m.randomWalkRadius_m = n.doubleOr("radius_m", m.randomWalkRadius_m);
         m.timeStep_s = n.doubleOr("time_step_s", m.timeStep_s);
+        m.dwellMax_s = n.doubleOr("dwell_s", m.dwellMax_s);
         return m;
     }
 
@@ -420,6 +430,16 @@ Scenario Scenario::fromYamlFile(const std::string& path)
 }
 
 // ------------------------------------------------------------------------- checks
+double ReceiverSpec::BodyShadow::loss_dB(double aoa_rad) const
+{
+    if (attenuation_dB <= 0) return 0;
+    constexpr double kEdge = 10 * M_PI / 180;
+    const double off = std::abs(mrpt::math::wrapToPi(aoa_rad - center_rad));
+    if (off <= halfWidth_rad) return attenuation_dB;
+    if (off >= halfWidth_rad + kEdge) return 0;
+    return attenuation_dB * 0.5 * (1 + std::cos(M_PI * (off - halfWidth_rad) / kEdge));
+}
+
 bool Scenario::insideRoom(const TPoint2D& p) const
 {
     if (roomCorners.size() < 3) return true;
@@ -514,6 +534,12 @@ void Scenario::validate() const
     if (!(m.timeStep_s > 0 && m.timeStep_s <= 0.1))
         fail("motion.time_step_s", "must be in (0, 0.1]");
     if (!(m.goalTolerance_m > 0)) fail("motion.goal_tolerance_m", "must be > 0");
+    if (!(m.dwellMax_s >= 0)) fail("motion.dwell_s", "must be >= 0");
+    const auto& body = receiver.bodyShadow;
+    if (!(body.attenuation_dB >= 0 && body.attenuation_dB <= 60))
+        fail("receiver.body_shadow.attenuation_db", "must be in [0, 60]");
+    if (!(body.halfWidth_rad >= 0 && body.halfWidth_rad <= M_PI))
+        fail("receiver.body_shadow.width_deg", "must be in [0, 360]");
     if (m.type == MotionType::Waypoints || m.type == MotionType::Loop)
     {
         if (m.waypoints.size() < (m.type == MotionType::Loop ? 2u : 1u))

@@ -102,6 +102,20 @@ __attribute__((target_clones("avx2", "default"))) void addTableNoise(
     }
 }
 
+/** The robot's body shadows the paths arriving from behind it (ReceiverSpec::BodyShadow). */
+void applyBodyShadow(
+    const ReceiverSpec::BodyShadow& body, double sensorYaw_rad, std::vector<PropagationPath>& paths)
+{
+    if (body.attenuation_dB <= 0) return;
+    for (auto& p : paths)
+    {
+        const double loss = body.loss_dB(p.arrival_rad - sensorYaw_rad);
+        if (loss <= 0) continue;
+        p.gain *= std::pow(10.0, -loss / 20.0);
+        p.crossingLoss_dB += loss;
+    }
+}
+
 double dB2power(double dB)
 {
     return std::pow(10.0, dB / 10.0);
@@ -260,6 +274,7 @@ std::vector<PropagationPath> Simulator::pathsAt(size_t tx, const TPose2D& robotP
     std::vector<PropagationPath> out;
     const double lambda = kSpeedOfLight / sc_.transmitters.at(tx).chanspec.centerFrequencyHz();
     channel_.computePaths(tx_.at(tx).images, {s.x, s.y}, lambda, out);
+    applyBodyShadow(sc_.receiver.bodyShadow, s.phi, out);
     return out;
 }
 
@@ -284,6 +299,7 @@ void Simulator::synthesizeFrame(
     truth.sensorPose = sensorPoseInWorld(truth.robotPose);
     const TPoint2D rxPoint{truth.sensorPose.x, truth.sensorPose.y};
     channel_.computePaths(tx_[txIndex].images, rxPoint, kSpeedOfLight / fc, paths_);
+    applyBodyShadow(rxSpec.bodyShadow, truth.sensorPose.phi, paths_);
     synthesizer_.synthesize(
         paths_, ArrayPlacement{&rxSpec.array, truth.sensorPose.phi, nRx},
         ArrayPlacement{&tx.array, tx.pose.phi, nTx}, cs, ideal_);

@@ -79,15 +79,18 @@ Trajectory Trajectory::generate(const Scenario& sc, mrpt::random::CRandomGenerat
     else if (moving)
         goal = m.waypoints.front();
 
+    size_t pausedUntil = 0;  // step index the robot stays stopped until (dwell at goals)
     for (size_t i = 0; i < n; ++i)
     {
         TTwist2D tw{0, 0, 0};
-        if (moving)
+        if (moving && i >= pausedUntil)
         {
             double dist = std::hypot(goal.x - pose.x, goal.y - pose.y);
             if (dist < m.goalTolerance_m)
             {
                 ++tr.goalsReached_;
+                if (m.dwellMax_s > 0)
+                    pausedUntil = i + size_t(rng.drawUniform(0.0, m.dwellMax_s) / tr.dt_);
                 if (m.type == MotionType::RandomWalk)
                     goal = drawGoal(sc, {pose.x, pose.y}, rng);
                 else if (m.type == MotionType::Loop)
@@ -98,7 +101,7 @@ Trajectory Trajectory::generate(const Scenario& sc, mrpt::random::CRandomGenerat
                     moving = false;
                 dist = std::hypot(goal.x - pose.x, goal.y - pose.y);
             }
-            if (moving)
+            if (moving && i >= pausedUntil)
             {
                 const double err =
                     wrapToPi(std::atan2(goal.y - pose.y, goal.x - pose.x) - pose.phi);

@@ -1,10 +1,13 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
+#include <mrpt/core/Clock.h>
+#include <mrpt/math/TPose2D.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
 
+#include <deque>
 #include <map>
 #include <memory>
 #include <optional>
@@ -22,6 +25,13 @@ public:
         double windowMaxAge_s = 1.0;  //!< older frames are not combined
         /** Estimate once every `stride` accepted frames of a transmitter (1: every frame). */
         unsigned stride = 1;
+        /** With odometry: a window combines only the frames taken while the robot moved less
+         *  than this (translation [m], rotation [rad]) before its newest frame, so that they
+         *  share the direct path's bearing; reflections still decorrelate over that motion. */
+        double maxWindowTranslation_m = 0.15;
+        double maxWindowRotation_rad = 3.0 * M_PI / 180;
+        /** Odometry older than this before the newest CSI frame is forgotten [s]. */
+        double odometryHistory_s = 5.0;
     };
 
     BearingProcessor(
@@ -30,6 +40,14 @@ public:
     /** Transmitter arrays for AoD: one per MAC, and/or a default for all. */
     void setTransmitterArray(const MacAddress& mac, AntennaArray array);
     void setDefaultTransmitterArray(AntennaArray array);
+
+    /** Robot odometry at time t, in any fixed frame (e.g. CObservationOdometry::odometry;
+     *  in time order). Optional: without it every frame of a window (by age) is combined,
+     *  as for a robot assumed static, which is what the live sensor does. */
+    void addOdometry(mrpt::Clock::time_point t, const mrpt::math::TPose2D& odometry);
+    bool hasOdometry() const { return !odometry_.empty(); }
+    /** Odometry interpolated at t; nullopt outside the known span (±0.25 s at the ends). */
+    std::optional<mrpt::math::TPose2D> odometryAt(mrpt::Clock::time_point t) const;
 
     /** Runs the chain on one frame. Returns the bearing (sensor label: the CSI's + "_AOA"; its
      *  CObservationBearingRange gets "_AOA_BEARING"), or nullptr when the frame was rejected
@@ -46,6 +64,8 @@ public:
 
 private:
     const AntennaArray* txArrayOf(const MacAddress& mac) const;
+    /** Drops the older frames of frames_ taken too far (odometry) from the newest. */
+    void limitWindowByMotion();
 
     CsiPreprocessor pre_;
     std::unique_ptr<BearingEstimator> est_;
@@ -55,6 +75,7 @@ private:
     std::optional<AntennaArray> defaultTxArray_;
     std::map<MacAddress, unsigned> sinceLast_;
     std::vector<const CleanCsi*> frames_;
+    std::deque<std::pair<double, mrpt::math::TPose2D>> odometry_;  //!< (time [s], pose)
     const CleanCsi* lastFrame_ = nullptr;
     BearingResult lastResult_;
 };

@@ -8,6 +8,7 @@
 #include <mrpt_wifi/obs/MacAddress.h>
 #include <mrpt_wifi/sim/AntennaArray.h>
 
+#include <cmath>
 #include <complex>
 #include <cstdint>
 #include <optional>
@@ -89,6 +90,17 @@ struct ReceiverSpec
     double noiseFigure_dB = 7.0;
     double antennaGain_dBi = 2.0;
     uint16_t chipId = 0x006a;  //!< BCM4366c0
+    /** The robot's own body (chassis, mast, a laptop) shadows the receive antennas from one
+     *  side: every path arriving within ±halfWidth of `center` (sensor frame) loses
+     *  attenuation_dB, with a 10° raised-cosine edge. attenuation_dB = 0: no body. */
+    struct BodyShadow
+    {
+        double center_rad = M_PI;
+        double halfWidth_rad = 0;
+        double attenuation_dB = 0;
+        /** Loss [dB] of a ray arriving from `aoa_rad` (sensor frame). */
+        double loss_dB(double aoa_rad) const;
+    } bodyShadow;
 };
 
 enum class MotionType : uint8_t
@@ -111,6 +123,9 @@ struct MotionSpec
     mrpt::math::TPoint2D randomWalkCenter;  //!< defaults to the start position
     double randomWalkRadius_m = 5.0;
     double timeStep_s = 0.01;  //!< integration step of the ground truth
+    /** At every goal or waypoint reached the robot stops for a time drawn uniformly in
+     *  [0, dwellMax_s] (0: never stops), as a robot that pauses at random poses. */
+    double dwellMax_s = 0.0;
 };
 
 /** Wheel odometry error model. Per step of length d [m] and rotation Δθ [rad] the reported

@@ -1,0 +1,39 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/sim/Scenario.h>
+
+#include <cstdint>
+#include <string>
+
+namespace mrpt_wifi::sim
+{
+/** Seeds of the random rooms are split once and for all: estimators and their options are tuned
+ *  on the development seeds only (1 ≤ seed < kFirstEvaluationSeed), accuracy is reported on the
+ *  evaluation seeds (≥ kFirstEvaluationSeed), which no tuning has looked at. */
+constexpr uint32_t kFirstEvaluationSeed = 1000;
+inline bool isEvaluationSeed(uint32_t seed)
+{
+    return seed >= kFirstEvaluationSeed;
+}
+
+struct RandomRoomOptions
+{
+    double duration_s = 60.0;
+    /** Folder holding rt-ac86u.yaml and ap-linear-2.yaml (share/arrays). */
+    std::string arraysDir;
+};
+
+/** A random office-like room as scenario YAML text (share/scenarios/README.md, "Random rooms",
+ *  documents the distribution): a 6–14 × 5–10 m rectangle with walls of random reflectivity,
+ *  rough walls (weak scatterers just in front of them), 1–3 clusters of 3–5 scatterers, 1–3
+ *  pieces of furniture (attenuating segments with scattering edges), 3 access points near the
+ *  walls facing into the room at random yaw (one or two streams), the robot's body shadowing
+ *  one side of its receive array, and a robot that drives to random goals and stops at each
+ *  for up to 4 s. Every draw is a function of the seed. */
+std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options = {});
+
+/** The same, parsed (validated like any scenario file). */
+Scenario randomRoomScenario(uint32_t seed, const RandomRoomOptions& options = {});
+
+}  // namespace mrpt_wifi::sim

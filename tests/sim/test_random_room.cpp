@@ -1,0 +1,115 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * Random rooms (sim::randomRoomScenario) and the scenario keys they use: reproducible, valid,
+ * the development / evaluation split, the robot's body shadowing its array, stop-and-go drives. */
+#include <gtest/gtest.h>
+#include <mrpt/math/wrap2pi.h>
+#include <mrpt_wifi/sim/RandomRoom.h>
+#include <mrpt_wifi/sim/Simulator.h>
+
+#include <cmath>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::sim;
+
+namespace
+{
+RandomRoomOptions options()
+{
+    RandomRoomOptions o;
+    o.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
+    o.duration_s = 20;
+    return o;
+}
+}  // namespace
+
+TEST(RandomRoom, SameSeedSameRoomOtherSeedOtherRoom)
+{
+    EXPECT_EQ(randomRoomYaml(7, options()), randomRoomYaml(7, options()));
+    EXPECT_NE(randomRoomYaml(7, options()), randomRoomYaml(8, options()));
+    EXPECT_FALSE(isEvaluationSeed(1));
+    EXPECT_FALSE(isEvaluationSeed(kFirstEvaluationSeed - 1));
+    EXPECT_TRUE(isEvaluationSeed(kFirstEvaluationSeed));
+    EXPECT_NE(randomRoomYaml(1000, options()).find("evaluation seed"), std::string::npos);
+}
+
+TEST(RandomRoom, RoomsFollowTheDocumentedDistribution)
+{
+    for (uint32_t seed = 1; seed <= 30; ++seed)
+    {
+        const Scenario sc = randomRoomScenario(seed, options());  // validated
+        ASSERT_EQ(sc.roomCorners.size(), 4u);
+        const double W = sc.roomCorners[2].x, H = sc.roomCorners[2].y;
+        EXPECT_GE(W, 6.0);
+        EXPECT_LE(W, 14.0);
+        EXPECT_GE(H, 5.0);
+        EXPECT_LE(H, 10.0);
+        EXPECT_EQ(sc.transmitters.size(), 3u);
+        EXPECT_GE(sc.obstacles.size(), 1u);
+        EXPECT_GE(sc.scatterers.size(), 8u + 3u);  // rough walls + at least one cluster
+        EXPECT_GT(sc.receiver.bodyShadow.attenuation_dB, 0.0);
+        EXPECT_EQ(sc.motion.type, MotionType::RandomWalk);
+        EXPECT_GT(sc.motion.dwellMax_s, 0.0);
+        for (const auto& w : sc.walls) EXPECT_LE(std::abs(w.reflection), 0.5 + 1e-9);
+    }
+}
+
+TEST(RandomRoom, RobotStopsAndDrives)
+{
+    Simulator sim(randomRoomScenario(3, options()));
+    const auto& tr = sim.trajectory();
+    size_t stopped = 0, moving = 0;
+    for (double t = 0; t < 20; t += 0.05)
+        (std::abs(tr.velocityAt(t).vx) < 1e-6 && std::abs(tr.velocityAt(t).omega) < 1e-6
+             ? stopped
+             : moving)++;
+    EXPECT_GT(stopped, 10u);
+    EXPECT_GT(moving, 100u);
+}
+
+TEST(RandomRoom, BodyShadowAttenuatesPathsFromBehind)
+{
+    ReceiverSpec::BodyShadow b;
+    b.center_rad = M_PI;
+    b.halfWidth_rad = 45 * M_PI / 180;
+    b.attenuation_dB = 10;
+    EXPECT_DOUBLE_EQ(b.loss_dB(M_PI), 10);
+    EXPECT_DOUBLE_EQ(b.loss_dB(-M_PI + 0.5), 10);
+    EXPECT_DOUBLE_EQ(b.loss_dB(0), 0);
+    EXPECT_DOUBLE_EQ(b.loss_dB(M_PI - 60 * M_PI / 180), 0);  // beyond the 10° edge
+    const double edge = b.loss_dB(M_PI - 50 * M_PI / 180);
+    EXPECT_GT(edge, 0);
+    EXPECT_LT(edge, 10);
+
+    // In a simulated room: the line of sight from behind the robot loses the body's dB.
+    Scenario sc = randomRoomScenario(5, options());
+    sc.receiver.bodyShadow = b;
+    Simulator sim(sc);
+    Scenario clear = sc;
+    clear.receiver.bodyShadow.attenuation_dB = 0;
+    Simulator simClear(clear);
+    unsigned behind = 0;
+    for (double t = 0.5; t < 20; t += 0.25)
+    {
+        const auto pose = sim.trajectory().poseAt(t);
+        const auto shadowed = sim.pathsAt(0, pose);
+        const auto open = simClear.pathsAt(0, pose);
+        const double aoa =
+            mrpt::math::wrapToPi(shadowed.front().arrival_rad - sim.sensorPoseInWorld(pose).phi);
+        EXPECT_NEAR(
+            shadowed.front().crossingLoss_dB - open.front().crossingLoss_dB, b.loss_dB(aoa), 1e-9);
+        behind += b.loss_dB(aoa) == 10;
+    }
+    EXPECT_GT(behind, 0u);
+}
+
+TEST(RandomRoom, ScenarioKeysAreReadAndChecked)
+{
+    const std::string base = randomRoomYaml(4, options());
+    const Scenario sc = Scenario::fromYamlText(base, "r4.yaml");
+    EXPECT_NEAR(sc.receiver.bodyShadow.center_rad, M_PI, 1e-12);
+    EXPECT_DOUBLE_EQ(sc.motion.dwellMax_s, 4.0);
+    std::string bad = base;
+    bad.replace(bad.find("dwell_s: 4"), 10, "dwell_s: -1");
+    EXPECT_THROW(Scenario::fromYamlText(bad, "bad.yaml"), ScenarioError);
+}
