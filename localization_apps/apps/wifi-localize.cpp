@@ -14,10 +14,12 @@
 #include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/vector_loadsave.h>
+#include <mrpt/opengl/CFBORender.h>
 #include <mrpt/opengl/CGridPlaneXY.h>
 #include <mrpt/opengl/CPointCloud.h>
 #include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CText.h>
 #include <mrpt/opengl/CTexturedPlane.h>
 #include <mrpt/opengl/stock_objects.h>
 #include <mrpt/serialization/CArchive.h>
@@ -30,6 +32,7 @@
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -38,6 +41,8 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -165,95 +170,203 @@ public:
         scene->insert(rays_);
         estimate_ = mrpt::opengl::stock_objects::CornerXYZSimple(0.6f, 4.0f);
         scene->insert(estimate_);
-        profile_ = mrpt::opengl::CTexturedPlane::Create(0, 1, 0, 1);
-        auto vp = scene->createViewport("profile");
-        vp->setViewportPosition(0.72, 0.68, 0.27, 0.3);
-        vp->setBorderSize(1);
-        vp->getCamera().setOrthogonal(true);
-        vp->getCamera().setPointingAt(0.5, 0.5, 0);
-        vp->getCamera().setZoomDistance(1.2f);
-        vp->getCamera().setElevationDegrees(90);
-        vp->getCamera().setAzimuthDegrees(-90);
-        vp->insert(profile_);
+        // The latest bearing-delay profile, as a picture beside the room (x: angle -90..90 deg,
+        // y: delay), with a frame around it.
+        const double px0 = roomMax.x + 0.5, pw = 0.8 * (roomMax.y - roomMin.y);
+        profile_ = mrpt::opengl::CTexturedPlane::Create(
+            float(px0), float(px0 + pw), float(roomMin.y), float(roomMax.y));
+        scene->insert(profile_);
+        auto frame = mrpt::opengl::CSetOfLines::Create();
+        frame->appendLine(px0, roomMin.y, 0, px0 + pw, roomMin.y, 0);
+        frame->appendLineStrip(px0 + pw, roomMax.y, 0);
+        frame->appendLineStrip(px0, roomMax.y, 0);
+        frame->appendLineStrip(px0, roomMin.y, 0);
+        frame->setColor(0.2, 0.2, 0.2);
+        scene->insert(frame);
+        auto label = mrpt::opengl::CText::Create("bearing-delay profile");
+        label->setLocation(px0, roomMax.y + 0.2, 0);
+        scene->insert(label);
+        roomMax_ = roomMax.x + 0.5 + pw;
         win_.unlockAccess3DScene();
-        win_.setCameraPointingToPoint(
-            float(0.5 * (roomMin.x + roomMax.x)), float(0.5 * (roomMin.y + roomMax.y)), 0);
-        win_.setCameraZoom(float(1.3 * std::max(roomMax.x - roomMin.x, roomMax.y - roomMin.y)));
-        win_.setCameraElevationDeg(75);
+        camTarget_ = mrpt::math::TPoint2Df(
+            float(0.5 * (roomMin.x + roomMax_)), float(0.5 * (roomMin.y + roomMax.y)));
+        camZoom_ = float(1.7 * std::max(roomMax_ - roomMin.x, roomMax.y - roomMin.y));
+        win_.setCameraPointingToPoint(camTarget_.x, camTarget_.y, 0);
+        win_.setCameraZoom(camZoom_);
+        win_.setCameraElevationDeg(kElevation_deg);
         win_.setCameraAzimuthDeg(-90);
-        win_.captureImagesStart();
     }
+
+    ~LiveView() { stopThread(); }
 
     bool isOpen() { return win_.isOpen(); }
 
-    void update(
+    /** What the window should show next; built by the filter's thread (cheap copies), drawn by
+     *  the view's own thread, so rendering never delays the filter. */
+    struct Snapshot
+    {
+        std::vector<float> px, py;
+        mrpt::math::TPose2D mean;
+        std::vector<std::array<double, 4>> rays;   // x0 y0 x1 y1
+        std::optional<mrpt::img::CImage> profile;  // x: angle, y: delay or power
+        std::string status;
+    };
+
+    static Snapshot snapshot(
         const LiveLocalizer& loc, const std::deque<CObservationWiFiBearing::Ptr>& recent,
         const bearing::BearingProfile* profile, const std::string& status)
     {
-        auto& scene = win_.get3DSceneAndLock();
-        (void)scene;
+        Snapshot s;
         const auto& pdf = loc.particles();
-        particles_->clear();
-        for (size_t i = 0; i < pdf.size(); ++i)
-        {
-            const auto& p = pdf.m_particles[i].d;
-            particles_->insertPoint(float(p.x), float(p.y), 0.02f);
-        }
-        const auto m = loc.mean();
-        estimate_->setPose(mrpt::poses::CPose3D(m.x, m.y, 0.05, m.phi, 0, 0));
-        rays_->clear();
-        const double len = 12.0;
+        s.px.reserve(pdf.size()), s.py.reserve(pdf.size());
+        for (const auto& p : pdf.m_particles)
+            s.px.push_back(float(p.d.x)), s.py.push_back(float(p.d.y));
+        s.mean = loc.mean();
+        const double len = 6.0;
         for (const auto& b : recent)
         {
             const auto* tx = loc.wifiMap().transmitters().find(b->transmitter);
-            if (b->hasAod && tx)
+            if (b->hasAod && tx && loc.wifiMap().likelihoodOptions.use.aod)
             {
                 const double a = tx->pose.phi + b->aod_rad;
-                rays_->appendLine(
-                    tx->pose.x, tx->pose.y, 0.1, tx->pose.x + len * std::cos(a),
-                    tx->pose.y + len * std::sin(a), 0.1);
+                s.rays.push_back(
+                    {tx->pose.x, tx->pose.y, tx->pose.x + len * std::cos(a),
+                     tx->pose.y + len * std::sin(a)});
             }
             if (loc.wifiMap().likelihoodOptions.use.aoa)
             {
-                const auto sp = mrpt::poses::CPose2D(m) + mrpt::poses::CPose2D(b->sensorPose);
+                const auto sp = mrpt::poses::CPose2D(s.mean) + mrpt::poses::CPose2D(b->sensorPose);
                 const double a = sp.phi() + b->aoa_rad;
-                rays_->appendLine(
-                    sp.x(), sp.y(), 0.1, sp.x() + len * std::cos(a), sp.y() + len * std::sin(a),
-                    0.1);
+                s.rays.push_back(
+                    {sp.x(), sp.y(), sp.x() + len * std::cos(a), sp.y() + len * std::sin(a)});
             }
         }
         if (profile && profile->values.size() > 0)
         {
-            mrpt::img::CImage img;
-            Eigen::MatrixXf v = profile->values.transpose();  // rows: delay, columns: angle
-            const float mx = v.maxCoeff();
-            if (mx > 0) v /= mx;
-            img.setFromMatrix(v.colwise().reverse().eval(), true);
-            profile_->assignImage(img);
+            const Eigen::MatrixXf& v = profile->values;  // [angle][delay]
+            const float mx = std::max(v.maxCoeff(), 1e-20f);
+            if (v.cols() == 1)  // 1-D: a curve over angle, drawn into a picture
+            {
+                const int w = 360, h = 240;
+                mrpt::img::CImage img(w, h, mrpt::img::CH_RGB);
+                img.filledRectangle(0, 0, w - 1, h - 1, mrpt::img::TColor(255, 255, 255));
+                const double n = double(v.rows() - 1);
+                for (int i = 0; i + 1 < v.rows(); ++i)
+                    img.line(
+                        int(w * i / n), int((h - 1) * v(i, 0) / mx), int(w * (i + 1) / n),
+                        int((h - 1) * v(i + 1, 0) / mx), mrpt::img::TColor(200, 30, 30), 2);
+                s.profile = std::move(img);
+            }
+            else
+            {
+                // x: angle, y: delay (upwards), colour: power (dark blue .. yellow)
+                mrpt::img::CImage img(int(v.rows()), int(v.cols()), mrpt::img::CH_RGB);
+                for (int a = 0; a < v.rows(); ++a)
+                    for (int d = 0; d < v.cols(); ++d)
+                    {
+                        const float q = std::clamp(v(a, d) / mx, 0.0f, 1.0f);
+                        const auto r = uint8_t(255 * q), g = uint8_t(255 * std::sqrt(q)),
+                                   b = uint8_t(120 * (1 - q));
+                        img.setPixel(
+                            a, int(v.cols()) - 1 - d, (size_t(r) << 16) | (size_t(g) << 8) | b);
+                    }
+                s.profile = std::move(img);
+            }
         }
+        s.status = status;
+        return s;
+    }
+
+    /** Hands a snapshot to the view thread (replacing one not drawn yet). */
+    void post(Snapshot s)
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            next_ = std::move(s);
+        }
+        if (!thread_.joinable())
+            thread_ = std::thread(
+                [this]
+                {
+                    while (!stop_)
+                    {
+                        std::optional<Snapshot> s;
+                        {
+                            std::lock_guard<std::mutex> lk(mtx_);
+                            s.swap(next_);
+                        }
+                        if (s) draw(*s);
+                        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+                    }
+                });
+    }
+
+    void stopThread()
+    {
+        stop_ = true;
+        if (thread_.joinable()) thread_.join();
+    }
+
+    /** Draws a snapshot now (on the caller's thread; stopThread() first). */
+    void draw(const Snapshot& s)
+    {
+        win_.get3DSceneAndLock();
+        particles_->clear();
+        for (size_t i = 0; i < s.px.size(); ++i) particles_->insertPoint(s.px[i], s.py[i], 0.02f);
+        estimate_->setPose(mrpt::poses::CPose3D(s.mean.x, s.mean.y, 0.05, s.mean.phi, 0, 0));
+        rays_->clear();
+        for (const auto& r : s.rays) rays_->appendLine(r[0], r[1], 0.1, r[2], r[3], 0.1);
+        if (s.profile) profile_->assignImage(*s.profile);
         win_.unlockAccess3DScene();
-        win_.addTextMessage(5, 5, status, 0);
-        win_.addTextMessage(
-            5, 25,
-            "blue: particles, axes: estimate, orange: bearing rays (last second); top right: "
-            "bearing-delay profile (x: angle, y: delay)",
-            1);
+        win_.addTextMessage(5, 5, s.status, 0);
+        win_.addTextMessage(5, 25, kLegend, 1);
         win_.forceRepaint();
     }
 
-    /** Saves the last rendered frame; false if none was captured yet. */
-    bool screenshot(const std::string& file)
+    /** Saves what the window shows (same scene, camera and status text) as a PNG, rendered
+     *  off-screen (MRPT's CFBORender, EGL): reading a window's frame back is unreliable on
+     *  virtual displays such as Xvfb. */
+    void screenshot(const std::string& file, const std::string& status)
     {
-        auto img = win_.getLastWindowImagePtr();
-        return img && img->getWidth() > 0 && img->saveToFile(file);
+        mrpt::opengl::COpenGLScene copy;
+        {
+            auto& scene = win_.get3DSceneAndLock();
+            copy = *scene;
+            win_.unlockAccess3DScene();
+        }
+        auto vp = copy.getViewport("main");
+        mrpt::opengl::CCamera cam;
+        cam.setPointingAt(camTarget_.x, camTarget_.y, 0);
+        cam.setZoomDistance(camZoom_);
+        cam.setElevationDegrees(kElevation_deg);
+        cam.setAzimuthDegrees(-90);
+        vp->setCustomBackgroundColor(mrpt::img::TColorf(0.6f, 0.6f, 0.6f));
+        vp->addTextMessage(5, 5, status, 0);
+        vp->addTextMessage(5, 25, kLegend, 1);
+        mrpt::opengl::CFBORender render(mrpt::opengl::CFBORender::Parameters(1000, 700));
+        render.setCamera(copy, cam);
+        mrpt::img::CImage img;
+        render.render_RGB(copy, img);
+        if (!img.saveToFile(file)) throw std::runtime_error("cannot write '" + file + "'");
     }
 
 private:
+    static constexpr float kElevation_deg = 80;
+    static constexpr const char* kLegend =
+        "blue: particles, axes: estimate, orange: bearing rays (last second); right: "
+        "latest bearing-delay profile (x: angle, y: delay)";
     mrpt::gui::CDisplayWindow3D win_;
+    mrpt::math::TPoint2Df camTarget_;
+    float camZoom_ = 10;
+    double roomMax_ = 0;  // right end of the drawing (room + profile)
     mrpt::opengl::CPointCloud::Ptr particles_;
     mrpt::opengl::CSetOfLines::Ptr rays_;
     mrpt::opengl::CSetOfObjects::Ptr estimate_;
     mrpt::opengl::CTexturedPlane::Ptr profile_;
+    std::thread thread_;
+    std::mutex mtx_;
+    std::optional<Snapshot> next_;
+    std::atomic<bool> stop_{false};
 };
 
 std::string fmt(double v, int prec = 2)
@@ -326,7 +439,9 @@ int main(int argc, char** argv)
             mrpt::config::CConfigFile ini(iniPath);
             const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
             LiveLocalizer loc(ini, iniDir);
-            auto fallback = makeFallbackProcessor(ini, iniDir, argView.getValue());
+            auto fallback = makeFallbackProcessor(ini, iniDir, false);
+            auto lastProfileWanted = Clock::now();
+            std::optional<bearing::BearingProfile> latestProfile;  // for the view
 
             const std::string outDir = argOut.getValue();
             mrpt::system::createDirectory(outDir);
@@ -394,6 +509,7 @@ int main(int argc, char** argv)
             const auto elapsed = [&]
             { return std::chrono::duration<double>(Clock::now() - t0).count(); };
             std::string stopReason = "Ctrl+C";
+            std::string lastStatusText = "(no data yet)";
             while (!g_stop)
             {
                 if (argDuration.getValue() > 0 && elapsed() >= argDuration.getValue())
@@ -456,9 +572,20 @@ int main(int argc, char** argv)
                     else if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obs))
                     {
                         ++nCsi;
+                        // The view shows a bearing-delay profile twice a second: only then
+                        // does the estimator keep one (it costs more than the bearing).
+                        bool keep = false;
+                        if (fallback && view)
+                            fallback->estimator().options().keepProfile = keep =
+                                Clock::now() - lastProfileWanted > std::chrono::milliseconds(500);
                         if (fallback && !sensorBearingLabels.count(csi->sensorLabel))
                             if (auto fb = fallback->process(*csi))
                             {
+                                if (keep && fallback->estimator().lastProfile())
+                                {
+                                    latestProfile = *fallback->estimator().lastProfile();
+                                    lastProfileWanted = Clock::now();
+                                }
                                 ++nFallback, ++nBearings, ++secBearings;
                                 loc.addBearing(fb);
                                 recent.push_back(fb);
@@ -509,6 +636,7 @@ int main(int argc, char** argv)
                         (lags.empty() ? std::string("-") : fmt(lags.back() * 1e3, 0) + "ms") +
                         (loc.hasOdometry() ? "" : " (no odometry)");
                 }
+                if (!statusText.empty()) lastStatusText = statusText;
                 if (sinceStatus >= 1.0)
                 {
                     if (!argQuiet.getValue()) std::cerr << "[wifi-localize] " << statusText << "\n";
@@ -517,9 +645,8 @@ int main(int argc, char** argv)
                 }
                 if (view && now - lastView > std::chrono::milliseconds(200))
                 {
-                    view->update(
-                        loc, recent, fallback ? fallback->estimator().lastProfile() : nullptr,
-                        statusText);
+                    view->post(LiveView::snapshot(
+                        loc, recent, latestProfile ? &*latestProfile : nullptr, statusText));
                     lastView = now;
                 }
             }
@@ -528,14 +655,10 @@ int main(int argc, char** argv)
                 if (s->thread.joinable()) s->thread.join();
             if (view && !argShot.getValue().empty())
             {
-                // One more frame, then the capture of it.
-                view->update(
-                    loc, recent, fallback ? fallback->estimator().lastProfile() : nullptr,
-                    "final: " + std::to_string(loc.steps()) + " filter steps");
-                std::this_thread::sleep_for(std::chrono::milliseconds(500));
-                if (!view->screenshot(argShot.getValue()))
-                    throw std::runtime_error(
-                        "--screenshot: the window produced no image (no display / OpenGL?)");
+                view->stopThread();
+                view->draw(LiveView::snapshot(
+                    loc, recent, latestProfile ? &*latestProfile : nullptr, lastStatusText));
+                view->screenshot(argShot.getValue(), lastStatusText);
             }
 
             // ---- summary
