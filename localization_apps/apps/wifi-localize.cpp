@@ -36,6 +36,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <csignal>
 #include <deque>
 #include <fstream>
@@ -132,6 +133,63 @@ std::unique_ptr<bearing::BearingProcessor> makeFallbackProcessor(
         p->setDefaultTransmitterArray(AntennaArray::fromYamlFile(tx));
     return p;
 }
+
+/** Writes observations to a rawlog from its own thread, so compression never delays the
+ *  filter; close() writes everything queued. */
+class RawlogWriter
+{
+public:
+    explicit RawlogWriter(const std::string& path)
+    {
+        if (!out_.open(path, 1)) throw std::runtime_error("cannot write '" + path + "'");
+        thread_ = std::thread(
+            [this]
+            {
+                auto arch = mrpt::serialization::archiveFrom(out_);
+                std::unique_lock<std::mutex> lk(mtx_);
+                for (;;)
+                {
+                    cv_.wait(lk, [this] { return closing_ || !queue_.empty(); });
+                    if (queue_.empty()) return;  // closing, all written
+                    auto o = std::move(queue_.front());
+                    queue_.pop_front();
+                    lk.unlock();
+                    arch << *o;
+                    ++written_;
+                    lk.lock();
+                }
+            });
+    }
+    ~RawlogWriter() { close(); }
+    void push(mrpt::obs::CObservation::Ptr o)
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            queue_.push_back(std::move(o));
+        }
+        cv_.notify_one();
+    }
+    void close()
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            closing_ = true;
+        }
+        cv_.notify_one();
+        if (thread_.joinable()) thread_.join();
+        out_.close();
+    }
+    uint64_t written() const { return written_; }
+
+private:
+    mrpt::io::CFileGZOutputStream out_;
+    std::thread thread_;
+    std::mutex mtx_;
+    std::condition_variable cv_;
+    std::deque<mrpt::obs::CObservation::Ptr> queue_;
+    bool closing_ = false;
+    std::atomic<uint64_t> written_{0};
+};
 
 /** Percentile of a copy. */
 double percentile(std::vector<double> v, double q)
@@ -449,13 +507,8 @@ int main(int argc, char** argv)
                 throw std::runtime_error("cannot create " + outDir);
             std::ofstream tum(outDir + "/estimate_tum.txt");
             tum << "# wifi-localize estimate (PF mean): t x y z qx qy qz qw\n" << std::flush;
-            std::unique_ptr<mrpt::io::CFileGZOutputStream> rawlog;
-            if (argRawlog.isSet())
-            {
-                rawlog = std::make_unique<mrpt::io::CFileGZOutputStream>();
-                if (!rawlog->open(argRawlog.getValue(), 1))
-                    throw std::runtime_error("cannot write '" + argRawlog.getValue() + "'");
-            }
+            std::unique_ptr<RawlogWriter> rawlog;
+            if (argRawlog.isSet()) rawlog = std::make_unique<RawlogWriter>(argRawlog.getValue());
 
             // ---- sensors: every section with a `driver`, as rawlog-grabber does
             std::vector<std::unique_ptr<SensorRunner>> sensors;
@@ -550,7 +603,7 @@ int main(int argc, char** argv)
                 {
                     auto obs = std::dynamic_pointer_cast<mrpt::obs::CObservation>(o);
                     if (!obs) continue;
-                    if (rawlog) mrpt::serialization::archiveFrom(*rawlog) << *obs;
+                    if (rawlog) rawlog->push(obs);
                     lastObsWall = elapsed();
                     if (firstObsWall == 0) firstObsWall = lastObsWall;
                     newestObs = std::max(newestObs, mrpt::Clock::toDouble(obs->timestamp));
@@ -660,6 +713,8 @@ int main(int argc, char** argv)
                     loc, recent, latestProfile ? &*latestProfile : nullptr, lastStatusText));
                 view->screenshot(argShot.getValue(), lastStatusText);
             }
+
+            if (rawlog) rawlog->close();
 
             // ---- summary
             const double runTime = elapsed();

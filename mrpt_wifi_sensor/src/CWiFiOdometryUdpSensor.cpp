@@ -28,7 +28,8 @@ void CWiFiOdometryUdpSensor::loadConfig_sensorSpecific(
     const int port = c.read_int(section, "udp_port", -1, true);
     if (port < 0 || port > 65535)
         throw std::invalid_argument(
-            "[" + section + "] udp_port = " + std::to_string(port) + ": must be in 0..65535");
+            "section '" + section + "', udp_port = " + std::to_string(port) +
+            ": must be in 0..65535");
     options_.port = uint16_t(port);
     options_.bindAddress = c.read_string(section, "udp_bind_address", options_.bindAddress);
 }
