@@ -220,13 +220,13 @@ public:
         scene->insert(aps);
         particles_ = mrpt::opengl::CPointCloud::Create();
         particles_->setColor(0.2, 0.4, 1.0);
-        particles_->setPointSize(2.0);
+        particles_->setPointSize(4.0);
         scene->insert(particles_);
         rays_ = mrpt::opengl::CSetOfLines::Create();
         rays_->setColor(0.9, 0.5, 0.0, 0.6);
         rays_->setLineWidth(1.5);
         scene->insert(rays_);
-        estimate_ = mrpt::opengl::stock_objects::CornerXYZSimple(0.6f, 4.0f);
+        estimate_ = mrpt::opengl::stock_objects::CornerXYZSimple(0.8f, 5.0f);
         scene->insert(estimate_);
         // The latest bearing-delay profile, as a picture beside the room (x: angle -90..90 deg,
         // y: delay), with a frame around it.
@@ -241,9 +241,9 @@ public:
         frame->appendLineStrip(px0, roomMin.y, 0);
         frame->setColor(0.2, 0.2, 0.2);
         scene->insert(frame);
-        auto label = mrpt::opengl::CText::Create("bearing-delay profile");
-        label->setLocation(px0, roomMax.y + 0.2, 0);
-        scene->insert(label);
+        profileLabel_ = mrpt::opengl::CText::Create("bearing profile (none yet)");
+        profileLabel_->setLocation(px0, roomMax.y + 0.2, 0);
+        scene->insert(profileLabel_);
         roomMax_ = roomMax.x + 0.5 + pw;
         win_.unlockAccess3DScene();
         camTarget_ = mrpt::math::TPoint2Df(
@@ -267,6 +267,7 @@ public:
         mrpt::math::TPose2D mean;
         std::vector<std::array<double, 4>> rays;   // x0 y0 x1 y1
         std::optional<mrpt::img::CImage> profile;  // x: angle, y: delay or power
+        std::string profileLabel;
         std::string status;
     };
 
@@ -302,6 +303,7 @@ public:
         if (profile && profile->values.size() > 0)
         {
             const Eigen::MatrixXf& v = profile->values;  // [angle][delay]
+            s.profileLabel = profile->label + (v.cols() == 1 ? " over angle" : ": angle x delay");
             const float mx = std::max(v.maxCoeff(), 1e-20f);
             if (v.cols() == 1)  // 1-D: a curve over angle, drawn into a picture
             {
@@ -370,11 +372,15 @@ public:
     {
         win_.get3DSceneAndLock();
         particles_->clear();
-        for (size_t i = 0; i < s.px.size(); ++i) particles_->insertPoint(s.px[i], s.py[i], 0.02f);
+        for (size_t i = 0; i < s.px.size(); ++i) particles_->insertPoint(s.px[i], s.py[i], 0.3f);
         estimate_->setPose(mrpt::poses::CPose3D(s.mean.x, s.mean.y, 0.05, s.mean.phi, 0, 0));
         rays_->clear();
         for (const auto& r : s.rays) rays_->appendLine(r[0], r[1], 0.1, r[2], r[3], 0.1);
-        if (s.profile) profile_->assignImage(*s.profile);
+        if (s.profile)
+        {
+            profile_->assignImage(*s.profile);
+            profileLabel_->setString(s.profileLabel);
+        }
         win_.unlockAccess3DScene();
         win_.addTextMessage(5, 5, s.status, 0);
         win_.addTextMessage(5, 25, kLegend, 1);
@@ -411,8 +417,8 @@ public:
 private:
     static constexpr float kElevation_deg = 80;
     static constexpr const char* kLegend =
-        "blue: particles, axes: estimate, orange: bearing rays (last second); right: "
-        "latest bearing-delay profile (x: angle, y: delay)";
+        "blue: particles, axes: estimate, orange: bearings of the last second, right: the "
+        "latest profile";
     mrpt::gui::CDisplayWindow3D win_;
     mrpt::math::TPoint2Df camTarget_;
     float camZoom_ = 10;
@@ -421,6 +427,7 @@ private:
     mrpt::opengl::CSetOfLines::Ptr rays_;
     mrpt::opengl::CSetOfObjects::Ptr estimate_;
     mrpt::opengl::CTexturedPlane::Ptr profile_;
+    mrpt::opengl::CText::Ptr profileLabel_;
     std::thread thread_;
     std::mutex mtx_;
     std::optional<Snapshot> next_;
