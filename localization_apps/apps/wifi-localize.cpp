@@ -563,7 +563,7 @@ int main(int argc, char** argv)
             Trajectory2D est;
             uint64_t nCsi = 0, nOdo = 0, nBearings = 0, nOther = 0, nFallback = 0;
             uint64_t secBearings = 0, secPoses = 0, poseOutputs = 0;
-            double newestObs = 0, lastObsWall = 0, firstObsWall = 0;
+            double newestObs = 0, lastObsWall = 0, firstObsWall = 0, firstObsTime = 0;
             const auto t0 = Clock::now();
             auto lastStatus = t0, lastView = t0;
             const auto elapsed = [&]
@@ -614,6 +614,7 @@ int main(int argc, char** argv)
                     lastObsWall = elapsed();
                     if (firstObsWall == 0) firstObsWall = lastObsWall;
                     newestObs = std::max(newestObs, mrpt::Clock::toDouble(obs->timestamp));
+                    if (firstObsTime == 0) firstObsTime = mrpt::Clock::toDouble(obs->timestamp);
                     if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs))
                     {
                         ++nOdo;
@@ -735,6 +736,7 @@ int main(int argc, char** argv)
                         ? std::string("none")
                         : std::to_string(sensorBearingLabels.size()) + " sensor(s)")
                 << " with own bearings), " << nOther << " other\n"
+                << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n"
                 << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
                 << "  filter steps   : " << loc.steps() << "\n"

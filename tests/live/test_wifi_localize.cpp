@@ -240,3 +240,79 @@ TEST(WifiLocalize, ViewUnderXvfbShowsMapParticlesAndRays)
     EXPECT_GT(blue, 10u);
     EXPECT_GT(colours.size(), 100u);
 }
+
+TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
+{
+    // One simulated drive as a tcpdump-style capture (CSI only, no odometry) and as a rawlog.
+    test::TempDir tmp;
+    const double seconds = 10;
+    const auto sim = test::run(
+        test::binDir() + "/wifi-sim " + kShare + "/scenarios/kidnapped.yaml " +
+        tmp.file("sim.rawlog") + " --pcap " + tmp.file("sim.pcap") + " -q -d " +
+        std::to_string(int(seconds)) + " -t " + tmp.file("truth"));
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+
+    // Offline: csi-bearings (AoD, as wifi-localize's own chain in the .ini) and
+    // wifi-pf-localization, bearings only (the capture has no odometry either).
+    const auto bearings = test::run(
+        test::binDir() + "/csi-bearings " + tmp.file("sim.rawlog") + " " + tmp.file("b.rawlog") +
+        " --algo aod --tx-array " + kShare + "/arrays/ap-linear-4.yaml --csv " + tmp.file("b.csv") +
+        " -q");
+    ASSERT_EQ(bearings.exitCode, 0) << bearings.output;
+    std::filesystem::remove(tmp.file("sim.rawlog"));
+    {
+        // The bearings as CSV, odometry "standing still": the filter sees only its noise floor.
+        std::ofstream(tmp.file("still.txt")) << "0 0 0 0 0 0 0 1\n"
+                                             << std::to_string(2e9) << " 0 0 0 0 0 0 1\n";
+    }
+    const auto offIni = tmp.file("off.ini");
+    {
+        std::istringstream in(test::readFile(kShare + "/localization/pf-localization-wifi.ini"));
+        std::ofstream o(offIni);
+        for (std::string line; std::getline(in, line);)
+            o << (line.rfind("use_aoa", 0) == 0 ? std::string("use_aoa = false") : line) << "\n";
+    }
+    const auto off = test::run(
+        test::binDir() + "/wifi-pf-localization " + offIni + " -m " + kShare +
+        "/localization/kidnapped-aps.yaml -b " + tmp.file("b.csv") + " --odometry-tum " +
+        tmp.file("still.txt") + " --sensor-pose 0.1 0 0.4 0 0 0 -n 1500 -q --no-plots -o " +
+        tmp.file("off"));
+    ASSERT_EQ(off.exitCode, 0) << off.output;
+
+    // Live: the capture replayed by CWiFiCSISensor (source = pcap) inside wifi-localize.
+    auto keys = baseKeys(5500, 5501);
+    keys["WIFI_CSI/source"] = "pcap\npcap_file = " + tmp.file("sim.pcap");
+    keys["WIFI_CSI/router_address"] = "";
+    const auto ini = deriveIni(keys, {"ODOMETRY"}, tmp.file("live.ini"));
+    const auto live = test::run(
+        "cd " + tmp.path().string() + " && timeout 120 " + test::binDir() + "/wifi-localize -p " +
+        test::libDir() + "/libmrpt_wifi_sensor.so " + ini + " -q -o live --stop-when-idle 2");
+    ASSERT_EQ(live.exitCode, 0) << live.output;
+
+    const auto a = Trajectory2D::fromTumFile(tmp.file("off/estimate_tum.txt"));
+    auto b = Trajectory2D::fromTumFile(tmp.file("live/estimate_tum.txt"));
+    ASSERT_GT(a.size(), 100u) << off.output;
+    ASSERT_GT(b.size(), 20u) << live.output;
+    // The replay runs on the wall clock: its first frame is the capture's first.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(live.output, m, std::regex("first obs\\. at  : ([0-9.]+)")))
+        << live.output;
+    std::istringstream csv(test::readFile(tmp.file("b.csv")));
+    std::string line;
+    std::getline(csv, line);  // header
+    std::getline(csv, line);
+    const double shift = std::stod(m[1]) - std::stod(line.substr(0, line.find(',')));
+    for (auto& t : b.t) t -= shift;
+    const auto gt = Trajectory2D::fromTumFile(tmp.file("truth/trajectory_tum.txt"));
+    const auto d = errorsOf(b, a, 4.0);  // live vs offline, after 4 s
+    const auto eLive = errorsOf(b, gt, 4.0), eOff = errorsOf(a, gt, 4.0);
+    ASSERT_GT(d.afterWarmup.size(), 10u);
+    // Same place within the filter's randomness (the two differ in step batching and random
+    // draws), and both where the robot is.
+    EXPECT_LE(median(d.afterWarmup), 0.5) << live.output << off.output;
+    EXPECT_LE(median(eLive.afterWarmup), 0.5) << "offline: " << median(eOff.afterWarmup);
+    EXPECT_LE(median(eOff.afterWarmup), 0.5) << "live: " << median(eLive.afterWarmup);
+    std::cout << "live vs offline: median distance " << median(d.afterWarmup)
+              << " m; median error live " << median(eLive.afterWarmup) << " m, offline "
+              << median(eOff.afterWarmup) << " m\n";
+}
