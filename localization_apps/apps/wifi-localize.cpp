@@ -533,9 +533,10 @@ int main(int argc, char** argv)
                         "[" + sec + "] driver = " + driver +
                         ": no such sensor class (forgot -p libmrpt_wifi_sensor.so?)");
                 r->sensor->loadConfig(ini, sec);
-                r->sensor->initialize();
                 sensors.push_back(std::move(r));
             }
+            // Every section checked before any sensor starts (opens sockets, replays, ...).
+            for (auto& r : sensors) r->sensor->initialize();
             if (sensors.empty())
                 throw std::runtime_error(
                     iniPath + ": no sensor section (a section with `driver = ...`)");
