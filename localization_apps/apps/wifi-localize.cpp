@@ -569,6 +569,30 @@ int main(int argc, char** argv)
             auto lastStatus = t0, lastView = t0;
             const auto elapsed = [&]
             { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+            // Filter steps with the bearings queued (one per max_bearings_per_step), then one
+            // pose output; also called between observations of a long batch, so a busy
+            // bearing chain can't hold the estimate back.
+            auto lastOutput = Clock::now();
+            const auto filterAndOutput = [&]() -> bool
+            {
+                bool stepped = false;
+                const auto stepStart = Clock::now();
+                while (loc.pendingBearings() > 0 &&
+                       Clock::now() - stepStart < std::chrono::milliseconds(50))
+                    stepped = loc.step() || stepped;
+                lastOutput = Clock::now();
+                if (!stepped) return false;
+                const auto m = loc.mean();
+                const double t = loc.lastStepTime();
+                lags.push_back(nowUnix() - t);
+                ++poseOutputs;
+                ++secPoses;
+                est.push_back(t, m);
+                tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
+                    << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
+                    << std::endl;  // flushed per line
+                return true;
+            };
             std::string stopReason = "Ctrl+C";
             std::string lastStatusText = "(no data yet)";
             while (!g_stop)
@@ -655,32 +679,14 @@ int main(int argc, char** argv)
                     }
                     else
                         ++nOther;
+                    if (Clock::now() - lastOutput > std::chrono::milliseconds(50))
+                        filterAndOutput();
                 }
                 while (!recent.empty() &&
                        mrpt::Clock::toDouble(recent.front()->timestamp) < newestObs - 1.0)
                     recent.pop_front();
 
-                // Filter steps with what arrived (one per max_bearings_per_step bearings, as
-                // the offline filter does one per bearing), then one pose output.
-                bool stepped = false;
-                const auto stepStart = Clock::now();
-                while (loc.pendingBearings() > 0 &&
-                       Clock::now() - stepStart < std::chrono::milliseconds(50))
-                    stepped = loc.step() || stepped;
-                if (stepped)
-                {
-                    const auto m = loc.mean();
-                    const double t = loc.lastStepTime();
-                    lags.push_back(nowUnix() - t);
-                    ++poseOutputs;
-                    ++secPoses;
-                    est.push_back(t, m);
-                    tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
-                        << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
-                        << std::endl;  // flushed per line
-                }
-                else
-                    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+                if (!filterAndOutput()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
 
                 const auto now = Clock::now();
                 const double sinceStatus = std::chrono::duration<double>(now - lastStatus).count();
