@@ -17,9 +17,12 @@ mrpt::obs::CActionRobotMovement2D unknownMotionAction(
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions m;
     m.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
     m.gaussianModel.a1 = m.gaussianModel.a2 = m.gaussianModel.a3 = m.gaussianModel.a4 = 0;
-    const double dt = std::clamp(dt_s, 1e-3, 5.0);
-    m.gaussianModel.minStdXY = maxSpeed_mps * dt;
-    m.gaussianModel.minStdPHI = maxTurnRate_rps * dt;
+    // A random walk: the variance grows linearly with time (std ∝ sqrt(dt)), so the spread
+    // after a second is the same however the second is cut into filter steps; after 1 s the
+    // std is the speed bound itself.
+    const double dt = std::clamp(dt_s, 1e-4, 5.0);
+    m.gaussianModel.minStdXY = maxSpeed_mps * std::sqrt(dt);
+    m.gaussianModel.minStdPHI = maxTurnRate_rps * std::sqrt(dt);
     mrpt::obs::CActionRobotMovement2D act;
     act.computeFromOdometry(mrpt::poses::CPose2D(0, 0, 0), m);
     return act;

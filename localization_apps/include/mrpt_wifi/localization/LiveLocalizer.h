@@ -17,9 +17,10 @@
 
 namespace mrpt_wifi::localization
 {
-/** Motion of a robot whose odometry is unknown: no displacement, with a Gaussian spread of
- *  `maxSpeed · dt` in x and y and `maxTurnRate · dt` in yaw (a random walk bounded by how fast
- *  the robot can move), for MRPT's particle filter. */
+/** Motion of a robot whose odometry is unknown, for MRPT's particle filter: no displacement,
+ *  a Gaussian random walk of std `maxSpeed · sqrt(dt · 1 s)` in x and y and
+ *  `maxTurnRate · sqrt(dt · 1 s)` in yaw (variance linear in time, so the spread does not depend
+ *  on how often the filter steps; after one second it is the speed bound). */
 mrpt::obs::CActionRobotMovement2D unknownMotionAction(
     double dt_s, double maxSpeed_mps, double maxTurnRate_rps);
 
