@@ -9,6 +9,8 @@
 #      wifi-calibrate -> the phase calibration file and its report;
 #   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (calibrated);
 #   4. kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap);
+#      then live: the emulator (CSI + its odometry stream) -> wifi-localize --view for 30 s
+#      under Xvfb, screenshot in live/live_view.png;
 #   5. drift correction: wifi-graphslam on a long drifting drive (share/scenarios/loop.yaml);
 #   6. device mapping: wifi-iot-map on share/scenarios/iot.yaml (its own 2.4 GHz calibration);
 #   7. a tcpdump capture (share/samples/, the project's encoder) -> rawlog (csi-pcap2rawlog).
@@ -73,6 +75,43 @@ echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs),
 echo "== 4. Kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap)"
 "$bin/wifi-pf-localization" "$share/localization/pf-localization-wifi.ini" "$out/bearings.rawlog" \
   -g "$out/kidnapped_truth/trajectory_recording_clock.txt" -o "$out/pf" -q | tail -12
+
+echo "== 4b. Live: emulator (CSI + odometry on 127.0.0.1) -> wifi-localize --view, 30 s under Xvfb"
+live_s=${DEMO_LIVE_SECONDS:-30}
+mkdir -p "$out/live"
+csi_port=$((20000 + RANDOM % 20000)); odo_port=$((csi_port + 1))
+"$bin/rt-ac86u-emulator" --scenario "$share/scenarios/kidnapped.yaml" --preconfigured 155/80 \
+  --port "$csi_port" --odometry-port "$odo_port" --state-dir "$out/live/router" \
+  --duration $((live_s + 20)) --status-period 0 >"$out/live/emulator.log" 2>&1 &
+live_emulator=$!
+pids+=("$live_emulator")
+sed -e "/^\[WIFI_CSI\]/,/^\[/ s|^udp_port *=.*|udp_port = $csi_port|" \
+    -e "/^\[ODOMETRY\]/,/^\[/ s|^udp_port *=.*|udp_port = $odo_port|" \
+    -e "s|^bearing_array *=.*|bearing_array = $share/arrays/rt-ac86u.yaml|" \
+    -e "s|^bearing_tx_array *=.*|bearing_tx_array = $share/arrays/ap-linear-4.yaml|" \
+    -e "s|^transmitters_file *=.*|transmitters_file = $share/localization/kidnapped-aps.yaml|" \
+    "$share/localization/wifi-localize-emulator.ini" >"$out/live/live.ini"
+xvfb-run -a -s "-screen 0 1280x800x24" "$bin/wifi-localize" -p "$lib/libmrpt_wifi_sensor.so" \
+  "$out/live/live.ini" --view --screenshot "$out/live/live_view.png" -d "$live_s" -o "$out/live" -q
+kill -TERM "$live_emulator" 2>/dev/null || true; wait "$live_emulator" 2>/dev/null || true
+live_zero=$(python3 -c "import json; print(json.load(open('$out/live/router/summary.json'))['emulator']['unix_time_at_sim_zero'])")
+awk -v z="$live_zero" '/^#/ {print; next} {$1 = sprintf("%.6f", z + $1 - 1700000000); print}' \
+  "$out/kidnapped_truth/trajectory_tum.txt" >"$out/live/truth_live_clock.txt"
+# The live estimate against the truth (same summary as wifi-pf-localization's).
+python3 - "$out/live/estimate_tum.txt" "$out/live/truth_live_clock.txt" <<'PY'
+import bisect, math, statistics, sys
+load = lambda f: [list(map(float, l.split())) for l in open(f) if not l.startswith('#')]
+est, gt = load(sys.argv[1]), load(sys.argv[2]); gt_t = [g[0] for g in gt]
+errs = []
+for e in est:
+    i = bisect.bisect_left(gt_t, e[0])
+    if 0 < i < len(gt):
+        a, b = gt[i - 1], gt[i]; w = (e[0] - a[0]) / (b[0] - a[0])
+        errs.append((e[0] - est[0][0], math.hypot(e[1] - a[1] - w * (b[1] - a[1]), e[2] - a[2] - w * (b[2] - a[2]))))
+after = [v for t, v in errs if t >= 5]
+if after:
+    print(f"  live estimate: {len(errs)} poses, median error after the first 5 s {statistics.median(after):.2f} m")
+PY
 
 echo "== 5. Drift correction: wifi-graphslam on a 5-minute drive with drifting odometry (loop.yaml)"
 "$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop.rawlog" -d 300 -t "$out/loop_truth" -q >/dev/null

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libpcap-dev
   openssh-server openssh-client tcpdump
   gnuplot-nox
+  xvfb xauth libgl1-mesa-dri
 )
 
 missing=()

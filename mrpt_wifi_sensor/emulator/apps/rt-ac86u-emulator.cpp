@@ -104,6 +104,11 @@ int main(int argc, char** argv)
                 5500, "PORT", cmd);
             TCLAP::ValueArg<unsigned> argPort(
                 "p", "port", "Destination UDP port", false, nexmon::kDefaultUdpPort, "PORT", cmd);
+            TCLAP::ValueArg<unsigned> argOdoPort(
+                "", "odometry-port",
+                "Also stream the scenario robot's wheel odometry, live, to this UDP port of the "
+                "destination (for CWiFiOdometryUdpSensor; 0 = off)",
+                false, 0, "PORT", cmd);
             TCLAP::ValueArg<std::string> argDest(
                 "", "dest", "Destination address: 127.0.0.0/8, ::1 or localhost only", false,
                 "127.0.0.1", "ADDR", cmd);
@@ -177,6 +182,8 @@ int main(int argc, char** argv)
 
             if (argPort.getValue() == 0 || argPort.getValue() > 65535)
                 throw std::invalid_argument("--port must be in 1..65535");
+            if (argOdoPort.getValue() > 65535)
+                throw std::invalid_argument("--odometry-port must be in 0..65535");
             if (argFrameByte.getValue() > 255)
                 throw std::invalid_argument("--frame-byte must be 0..255");
             EmulatorOptions o;
@@ -185,6 +192,7 @@ int main(int argc, char** argv)
             o.replayUdpPort = uint16_t(argReplayPort.getValue());
             o.destinationHost = argDest.getValue();
             o.port = uint16_t(argPort.getValue());
+            o.odometryPort = uint16_t(argOdoPort.getValue());
             o.stateDir =
                 argStateDir.isSet() ? argStateDir.getValue() : defaultStateDir(argPort.getValue());
             o.shimPath = argShim.getValue();

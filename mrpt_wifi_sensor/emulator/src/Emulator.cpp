@@ -63,6 +63,16 @@ const char* toString(StopReason r)
     return "?";
 }
 
+std::string odometryDatagram(
+    uint64_t seq, double simTime_s, const mrpt::math::TPose2D& odometry,
+    const mrpt::math::TTwist2D& velocityLocal)
+{
+    return mrpt::format(
+        "MRPT_WIFI_ODO 1 %llu %.6f %.6f %.6f %.8f %.6f %.6f %.8f\n",
+        static_cast<unsigned long long>(seq), simTime_s, odometry.x, odometry.y, odometry.phi,
+        velocityLocal.vx, velocityLocal.vy, velocityLocal.omega);
+}
+
 // ------------------------------------------------------------------------------------ sources
 struct Emulator::Source
 {
@@ -204,6 +214,16 @@ Emulator::Emulator(EmulatorOptions options)
     // Loopback check first: nothing else matters if the destination is not allowed.
     sender_ =
         std::make_unique<LoopbackUdpSender>(loopbackDestination(opt_.destinationHost, opt_.port));
+    if (opt_.odometryPort != 0)
+    {
+        if (!opt_.replayFile.empty())
+            throw std::invalid_argument(
+                "the odometry stream needs a scenario (a capture holds no odometry)");
+        if (opt_.odometryPort == opt_.port)
+            throw std::invalid_argument("the odometry port must differ from the CSI port");
+        odometrySender_ = std::make_unique<LoopbackUdpSender>(
+            loopbackDestination(opt_.destinationHost, opt_.odometryPort));
+    }
 
     if (!opt_.replayFile.empty())
         source_ = std::make_unique<ReplaySource>(opt_.replayFile, opt_.replayUdpPort);
@@ -495,8 +515,26 @@ std::vector<ScanEntry> Emulator::scan(WifiBand band)
     return out;
 }
 
+void Emulator::sendDueOdometry(double now)
+{
+    const auto* s = dynamic_cast<const ScenarioSource*>(source_.get());
+    if (!odometrySender_ || !s) return;
+    // The robot drives whatever the router does (reboots, channel changes): only the clock.
+    const auto& odo = s->sim.odometry();
+    while (nextOdometry_ < odo.size() && wallAt(odo[nextOdometry_].time_s) <= now)
+    {
+        const auto& o = odo[nextOdometry_];
+        const std::string d =
+            odometryDatagram(counters_.odometrySent, o.time_s, o.odometry, o.velocityLocal);
+        if (odometrySender_->send(reinterpret_cast<const uint8_t*>(d.data()), d.size()))
+            ++counters_.odometrySent;
+        ++nextOdometry_;
+    }
+}
+
 void Emulator::processDue(double now)
 {
+    sendDueOdometry(now);
     refreshCaptures(now);
     double t = 0;
     for (int budget = kItemsPerIteration; budget > 0 && source_->peek(t); --budget)
@@ -519,6 +557,9 @@ double Emulator::nextWakeup(double now)
     double t = now + kMaxPollWait_s;
     double next = 0;
     if (source_->peek(next)) t = std::min(t, wallAt(next));
+    if (const auto* s = dynamic_cast<const ScenarioSource*>(source_.get());
+        odometrySender_ && s && nextOdometry_ < s->sim.odometry().size())
+        t = std::min(t, wallAt(s->sim.odometry()[nextOdometry_].time_s));
     t = std::min(t, router_.nextTimedChange(now));
     if (silencedUntil_ > now) t = std::min(t, silencedUntil_);
     t = std::min(t, opt_.duration_s);
@@ -559,6 +600,7 @@ StopReason Emulator::run()
             else
             {
                 source_->restart();
+                nextOdometry_ = 0;
                 simAnchor_ = 0;
                 wallAnchor_ = now;
                 lastItemTime_ = 0;
@@ -795,6 +837,7 @@ std::string Emulator::statusJson() const
         .uint("replay_off_channel", c.replayOffChannel)
         .uint("reboots", c.reboots)
         .uint("rewinds", c.rewinds)
+        .uint("odometry_sent", c.odometrySent)
         .num("max_lag_s", c.maxLag_s);
     JsonObject root;
     root.raw("emulator", em.json())

@@ -1,6 +1,8 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
+#include <mrpt/math/TPose2D.h>
+#include <mrpt/math/TTwist2D.h>
 #include <mrpt_wifi/emulator/ControlSocket.h>
 #include <mrpt_wifi/emulator/FaultInjector.h>
 #include <mrpt_wifi/emulator/LoopbackUdp.h>
@@ -33,6 +35,10 @@ struct EmulatorOptions
 
     std::string destinationHost = "127.0.0.1";  //!< loopback only (127.0.0.0/8, ::1)
     uint16_t port = 5500;
+    /** Scenario mode: also stream the robot's (noisy, drifting) wheel odometry of the scenario
+     * as it happens, one text datagram per sample to destinationHost:odometryPort, for
+     * CWiFiOdometryUdpSensor (format: odometryDatagram()). 0: off. */
+    uint16_t odometryPort = 0;
 
     /** Where emulator.sock and bin/ (links to the shim) go; empty: no control socket. */
     std::string stateDir;
@@ -78,8 +84,9 @@ struct DataPlaneCounters
     uint64_t replayUnparsable = 0;
     uint64_t replayOffChannel = 0;  //!< not on a captured channel (or CSI silent)
     uint64_t reboots = 0;
-    uint64_t rewinds = 0;  //!< simulator restarts after channel / state changes
-    double maxLag_s = 0;   //!< worst lateness of a send vs. its real-time schedule
+    uint64_t rewinds = 0;       //!< simulator restarts after channel / state changes
+    uint64_t odometrySent = 0;  //!< odometry datagrams (odometryPort)
+    double maxLag_s = 0;        //!< worst lateness of a send vs. its real-time schedule
 };
 
 enum class StopReason : uint8_t
@@ -91,6 +98,14 @@ enum class StopReason : uint8_t
     EndOfSource
 };
 const char* toString(StopReason r);
+
+/** The odometry datagram: one ASCII line
+ *  `MRPT_WIFI_ODO 1 SEQ SIM_TIME_S X Y PHI VX VY OMEGA\n` — sequence number, simulated time [s],
+ *  the accumulated odometry pose (odometry frame; m, m, rad) and the measured body-frame
+ *  velocity (m/s, m/s, rad/s). Receivers timestamp it on arrival, as they do the CSI. */
+std::string odometryDatagram(
+    uint64_t seq, double simTime_s, const mrpt::math::TPose2D& odometry,
+    const mrpt::math::TTwist2D& velocityLocal);
 
 /** The emulated RT-AC86U: a RouterModel driven through a Unix socket by the command shims,
  * and a data plane that sends the CSI the router would report as Nexmon datagrams over UDP to
@@ -151,6 +166,7 @@ private:
     void reboot();
     void refreshCaptures(double now);
     void processDue(double now);
+    void sendDueOdometry(double now);
     void processScenarioFrame(CObservationWiFiCSI& obs, double t);
     void processReplayDatagram(std::vector<uint8_t>& d, double t);
     void emit(std::vector<uint8_t>&& datagram, double t);
@@ -167,6 +183,8 @@ private:
     RouterModel router_;
     FaultInjector faults_;
     std::unique_ptr<LoopbackUdpSender> sender_;
+    std::unique_ptr<LoopbackUdpSender> odometrySender_;  //!< odometryPort != 0
+    size_t nextOdometry_ = 0;
     std::unique_ptr<ControlServer> control_;
     std::unique_ptr<Source> source_;
     DataPlaneCounters counters_;

@@ -1,0 +1,794 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * wifi-localize: live localization. Runs the sensors of a rawlog-grabber-style .ini in-process
+ * (CWiFiCSISensor from the plugin given with -p, and any MRPT sensor producing
+ * CObservationOdometry), turns CSI into bearings (the sensor's own `<label>_AOA` bearings when it
+ * makes them, else its own BearingProcessor), and feeds them to MRPT's particle filter with the
+ * WiFi bearing map as they arrive: pose estimate as TUM (flushed per line), a status line per
+ * second, an optional rawlog of everything seen, and an optional live 3-D view. */
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/gui/CDisplayWindow3D.h>
+#include <mrpt/hwdrivers/CGenericSensor.h>
+#include <mrpt/img/CImage.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/io/vector_loadsave.h>
+#include <mrpt/opengl/CFBORender.h>
+#include <mrpt/opengl/CGridPlaneXY.h>
+#include <mrpt/opengl/CPointCloud.h>
+#include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CText.h>
+#include <mrpt/opengl/CTexturedPlane.h>
+#include <mrpt/opengl/stock_objects.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt/system/os.h>
+#include <mrpt_wifi/localization/LiveLocalizer.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/PhaseCalibration.h>
+#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <csignal>
+#include <deque>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <thread>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+using Clock = std::chrono::steady_clock;
+
+namespace
+{
+std::atomic<bool> g_stop{false};
+void onSignal(int)
+{
+    g_stop = true;
+}
+
+double nowUnix()
+{
+    return mrpt::Clock::toDouble(mrpt::Clock::now());
+}
+
+/** One sensor of the .ini, run like rawlog-grabber does: its own thread calling doProcess()
+ *  at its process_rate; the main thread collects with getObservations() (thread-safe). */
+struct SensorRunner
+{
+    std::string section;
+    mrpt::hwdrivers::CGenericSensor::Ptr sensor;
+    std::thread thread;
+    std::string error;  // set by the thread when doProcess() throws
+
+    void start(const std::atomic<bool>& stop)
+    {
+        thread = std::thread(
+            [this, &stop]
+            {
+                const double rate = std::max(1.0, sensor->getProcessRate());
+                const auto period = std::chrono::duration<double>(1.0 / rate);
+                auto next = Clock::now();
+                try
+                {
+                    while (!stop)
+                    {
+                        sensor->doProcess();
+                        next += std::chrono::duration_cast<Clock::duration>(period);
+                        if (next < Clock::now()) next = Clock::now();
+                        std::this_thread::sleep_until(next);
+                    }
+                }
+                catch (const std::exception& e)
+                {
+                    error = cli::exceptionMessage(e);
+                }
+            });
+    }
+};
+
+/** The bearing chain wifi-localize runs itself on CSI of sensors that make no bearings: keys
+ *  `bearing_*` of the [wifi-localize] section (same meaning as csi-bearings' options). */
+std::unique_ptr<bearing::BearingProcessor> makeFallbackProcessor(
+    const mrpt::config::CConfigFileBase& ini, const std::string& iniDir, bool keepProfile)
+{
+    const std::string s = "wifi-localize";
+    const std::string algo = ini.read_string(s, "bearing_algorithm", "");
+    if (algo.empty()) return nullptr;
+    const auto path = [&](const std::string& key) -> std::string
+    {
+        std::string p = ini.read_string(s, key, "");
+        if (!p.empty() && p[0] != '/' && !mrpt::system::fileExists(p) &&
+            !mrpt::system::directoryExists(p))
+            p = iniDir + "/" + p;
+        return p;
+    };
+    const std::string array = path("bearing_array");
+    if (array.empty())
+        throw std::invalid_argument(
+            "[wifi-localize] bearing_algorithm is set: bearing_array (the receive array YAML) is "
+            "needed too");
+    auto est = bearing::createEstimator(algo);
+    est->options().keepProfile = keepProfile;
+    CalibrationStore calib;
+    if (const auto c = path("bearing_calibration"); !c.empty()) calib = CalibrationStore::open(c);
+    bearing::BearingProcessor::Options wo;
+    wo.stride = unsigned(std::max(1, ini.read_int(s, "bearing_stride", 1)));
+    auto p = std::make_unique<bearing::BearingProcessor>(
+        CsiPreprocessor(PreprocessOptions(), AntennaArray::fromYamlFile(array), calib),
+        std::move(est), wo);
+    if (const auto tx = path("bearing_tx_array"); !tx.empty())
+        p->setDefaultTransmitterArray(AntennaArray::fromYamlFile(tx));
+    return p;
+}
+
+/** Writes observations to a rawlog from its own thread, so compression never delays the
+ *  filter; close() writes everything queued. */
+class RawlogWriter
+{
+public:
+    explicit RawlogWriter(const std::string& path)
+    {
+        if (!out_.open(path, 1)) throw std::runtime_error("cannot write '" + path + "'");
+        thread_ = std::thread(
+            [this]
+            {
+                auto arch = mrpt::serialization::archiveFrom(out_);
+                std::unique_lock<std::mutex> lk(mtx_);
+                for (;;)
+                {
+                    cv_.wait(lk, [this] { return closing_ || !queue_.empty(); });
+                    if (queue_.empty()) return;  // closing, all written
+                    auto o = std::move(queue_.front());
+                    queue_.pop_front();
+                    lk.unlock();
+                    arch << *o;
+                    ++written_;
+                    lk.lock();
+                }
+            });
+    }
+    ~RawlogWriter() { close(); }
+    void push(mrpt::obs::CObservation::Ptr o)
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            queue_.push_back(std::move(o));
+        }
+        cv_.notify_one();
+    }
+    void close()
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            closing_ = true;
+        }
+        cv_.notify_one();
+        if (thread_.joinable()) thread_.join();
+        out_.close();
+    }
+    uint64_t written() const { return written_; }
+
+private:
+    mrpt::io::CFileGZOutputStream out_;
+    std::thread thread_;
+    std::mutex mtx_;
+    std::condition_variable cv_;
+    std::deque<mrpt::obs::CObservation::Ptr> queue_;
+    bool closing_ = false;
+    std::atomic<uint64_t> written_{0};
+};
+
+/** Percentile of a copy. */
+double percentile(std::vector<double> v, double q)
+{
+    if (v.empty()) return NAN;
+    const size_t k = std::min(v.size() - 1, size_t(q * double(v.size())));
+    std::nth_element(v.begin(), v.begin() + long(k), v.end());
+    return v[k];
+}
+
+/** The live window: AP map, particles, estimate, bearing rays of the last second, the latest
+ *  bearing–delay profile (when the fallback chain keeps one). */
+class LiveView
+{
+public:
+    LiveView(
+        const CWiFiBearingMap& map, const mrpt::math::TPose2D& roomMin,
+        const mrpt::math::TPose2D& roomMax)
+        : win_("wifi-localize", 1000, 700)
+    {
+        auto& scene = win_.get3DSceneAndLock();
+        auto grid = mrpt::opengl::CGridPlaneXY::Create(
+            float(roomMin.x), float(roomMax.x), float(roomMin.y), float(roomMax.y), 0, 1);
+        grid->setColor(0.75, 0.75, 0.75);
+        scene->insert(grid);
+        auto aps = mrpt::opengl::CSetOfObjects::Create();
+        map.getVisualizationInto(*aps);
+        scene->insert(aps);
+        particles_ = mrpt::opengl::CPointCloud::Create();
+        particles_->setColor(0.2, 0.4, 1.0);
+        particles_->setPointSize(4.0);
+        scene->insert(particles_);
+        rays_ = mrpt::opengl::CSetOfLines::Create();
+        rays_->setColor(0.9, 0.5, 0.0, 0.6);
+        rays_->setLineWidth(1.5);
+        scene->insert(rays_);
+        estimate_ = mrpt::opengl::stock_objects::CornerXYZSimple(0.8f, 5.0f);
+        scene->insert(estimate_);
+        // The latest bearing-delay profile, as a picture beside the room (x: angle -90..90 deg,
+        // y: delay), with a frame around it.
+        const double px0 = roomMax.x + 0.5, pw = 0.8 * (roomMax.y - roomMin.y);
+        profile_ = mrpt::opengl::CTexturedPlane::Create(
+            float(px0), float(px0 + pw), float(roomMin.y), float(roomMax.y));
+        scene->insert(profile_);
+        auto frame = mrpt::opengl::CSetOfLines::Create();
+        frame->appendLine(px0, roomMin.y, 0, px0 + pw, roomMin.y, 0);
+        frame->appendLineStrip(px0 + pw, roomMax.y, 0);
+        frame->appendLineStrip(px0, roomMax.y, 0);
+        frame->appendLineStrip(px0, roomMin.y, 0);
+        frame->setColor(0.2, 0.2, 0.2);
+        scene->insert(frame);
+        profileLabel_ = mrpt::opengl::CText::Create("bearing profile (none yet)");
+        profileLabel_->setLocation(px0, roomMax.y + 0.2, 0);
+        scene->insert(profileLabel_);
+        roomMax_ = roomMax.x + 0.5 + pw;
+        win_.unlockAccess3DScene();
+        camTarget_ = mrpt::math::TPoint2Df(
+            float(0.5 * (roomMin.x + roomMax_)), float(0.5 * (roomMin.y + roomMax.y)));
+        camZoom_ = float(1.7 * std::max(roomMax_ - roomMin.x, roomMax.y - roomMin.y));
+        win_.setCameraPointingToPoint(camTarget_.x, camTarget_.y, 0);
+        win_.setCameraZoom(camZoom_);
+        win_.setCameraElevationDeg(kElevation_deg);
+        win_.setCameraAzimuthDeg(-90);
+    }
+
+    ~LiveView() { stopThread(); }
+
+    bool isOpen() { return win_.isOpen(); }
+
+    /** What the window should show next; built by the filter's thread (cheap copies), drawn by
+     *  the view's own thread, so rendering never delays the filter. */
+    struct Snapshot
+    {
+        std::vector<float> px, py;
+        mrpt::math::TPose2D mean;
+        std::vector<std::array<double, 4>> rays;   // x0 y0 x1 y1
+        std::optional<mrpt::img::CImage> profile;  // x: angle, y: delay or power
+        std::string profileLabel;
+        std::string status;
+    };
+
+    static Snapshot snapshot(
+        const LiveLocalizer& loc, const std::deque<CObservationWiFiBearing::Ptr>& recent,
+        const bearing::BearingProfile* profile, const std::string& status)
+    {
+        Snapshot s;
+        const auto& pdf = loc.particles();
+        s.px.reserve(pdf.size()), s.py.reserve(pdf.size());
+        for (const auto& p : pdf.m_particles)
+            s.px.push_back(float(p.d.x)), s.py.push_back(float(p.d.y));
+        s.mean = loc.mean();
+        const double len = 6.0;
+        for (const auto& b : recent)
+        {
+            const auto* tx = loc.wifiMap().transmitters().find(b->transmitter);
+            if (b->hasAod && tx && loc.wifiMap().likelihoodOptions.use.aod)
+            {
+                const double a = tx->pose.phi + b->aod_rad;
+                s.rays.push_back(
+                    {tx->pose.x, tx->pose.y, tx->pose.x + len * std::cos(a),
+                     tx->pose.y + len * std::sin(a)});
+            }
+            if (loc.wifiMap().likelihoodOptions.use.aoa)
+            {
+                const auto sp = mrpt::poses::CPose2D(s.mean) + mrpt::poses::CPose2D(b->sensorPose);
+                const double a = sp.phi() + b->aoa_rad;
+                s.rays.push_back(
+                    {sp.x(), sp.y(), sp.x() + len * std::cos(a), sp.y() + len * std::sin(a)});
+            }
+        }
+        if (profile && profile->values.size() > 0)
+        {
+            const Eigen::MatrixXf& v = profile->values;  // [angle][delay]
+            s.profileLabel = profile->label + (v.cols() == 1 ? " over angle" : ": angle x delay");
+            const float mx = std::max(v.maxCoeff(), 1e-20f);
+            if (v.cols() == 1)  // 1-D: a curve over angle, drawn into a picture
+            {
+                const int w = 360, h = 240;
+                mrpt::img::CImage img(w, h, mrpt::img::CH_RGB);
+                img.filledRectangle(0, 0, w - 1, h - 1, mrpt::img::TColor(255, 255, 255));
+                const double n = double(v.rows() - 1);
+                for (int i = 0; i + 1 < v.rows(); ++i)
+                    img.line(
+                        int(w * i / n), int((h - 1) * v(i, 0) / mx), int(w * (i + 1) / n),
+                        int((h - 1) * v(i + 1, 0) / mx), mrpt::img::TColor(200, 30, 30), 2);
+                s.profile = std::move(img);
+            }
+            else
+            {
+                // x: angle, y: delay (upwards), colour: power (dark blue .. yellow)
+                mrpt::img::CImage img(int(v.rows()), int(v.cols()), mrpt::img::CH_RGB);
+                for (int a = 0; a < v.rows(); ++a)
+                    for (int d = 0; d < v.cols(); ++d)
+                    {
+                        const float q = std::clamp(v(a, d) / mx, 0.0f, 1.0f);
+                        const auto r = uint8_t(255 * q), g = uint8_t(255 * std::sqrt(q)),
+                                   b = uint8_t(120 * (1 - q));
+                        img.setPixel(
+                            a, int(v.cols()) - 1 - d, (size_t(r) << 16) | (size_t(g) << 8) | b);
+                    }
+                s.profile = std::move(img);
+            }
+        }
+        s.status = status;
+        return s;
+    }
+
+    /** Hands a snapshot to the view thread (replacing one not drawn yet). */
+    void post(Snapshot s)
+    {
+        {
+            std::lock_guard<std::mutex> lk(mtx_);
+            next_ = std::move(s);
+        }
+        if (!thread_.joinable())
+            thread_ = std::thread(
+                [this]
+                {
+                    while (!stop_)
+                    {
+                        std::optional<Snapshot> s;
+                        {
+                            std::lock_guard<std::mutex> lk(mtx_);
+                            s.swap(next_);
+                        }
+                        if (s) draw(*s);
+                        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+                    }
+                });
+    }
+
+    void stopThread()
+    {
+        stop_ = true;
+        if (thread_.joinable()) thread_.join();
+    }
+
+    /** Draws a snapshot now (on the caller's thread; stopThread() first). */
+    void draw(const Snapshot& s)
+    {
+        win_.get3DSceneAndLock();
+        particles_->clear();
+        for (size_t i = 0; i < s.px.size(); ++i) particles_->insertPoint(s.px[i], s.py[i], 0.3f);
+        estimate_->setPose(mrpt::poses::CPose3D(s.mean.x, s.mean.y, 0.05, s.mean.phi, 0, 0));
+        rays_->clear();
+        for (const auto& r : s.rays) rays_->appendLine(r[0], r[1], 0.1, r[2], r[3], 0.1);
+        if (s.profile)
+        {
+            profile_->assignImage(*s.profile);
+            profileLabel_->setString(s.profileLabel);
+        }
+        win_.unlockAccess3DScene();
+        win_.addTextMessage(5, 5, s.status, 0);
+        win_.addTextMessage(5, 25, kLegend, 1);
+        win_.forceRepaint();
+    }
+
+    /** Saves what the window shows (same scene, camera and status text) as a PNG, rendered
+     *  off-screen (MRPT's CFBORender, EGL): reading a window's frame back is unreliable on
+     *  virtual displays such as Xvfb. */
+    void screenshot(const std::string& file, const std::string& status)
+    {
+        mrpt::opengl::COpenGLScene copy;
+        {
+            auto& scene = win_.get3DSceneAndLock();
+            copy = *scene;
+            win_.unlockAccess3DScene();
+        }
+        auto vp = copy.getViewport("main");
+        mrpt::opengl::CCamera cam;
+        cam.setPointingAt(camTarget_.x, camTarget_.y, 0);
+        cam.setZoomDistance(camZoom_);
+        cam.setElevationDegrees(kElevation_deg);
+        cam.setAzimuthDegrees(-90);
+        vp->setCustomBackgroundColor(mrpt::img::TColorf(0.6f, 0.6f, 0.6f));
+        vp->addTextMessage(5, 5, status, 0);
+        vp->addTextMessage(5, 25, kLegend, 1);
+        mrpt::opengl::CFBORender render(mrpt::opengl::CFBORender::Parameters(1000, 700));
+        render.setCamera(copy, cam);
+        mrpt::img::CImage img;
+        render.render_RGB(copy, img);
+        if (!img.saveToFile(file)) throw std::runtime_error("cannot write '" + file + "'");
+    }
+
+private:
+    static constexpr float kElevation_deg = 80;
+    static constexpr const char* kLegend =
+        "blue: particles, axes: estimate, orange: bearings of the last second, right: the "
+        "latest profile";
+    mrpt::gui::CDisplayWindow3D win_;
+    mrpt::math::TPoint2Df camTarget_;
+    float camZoom_ = 10;
+    double roomMax_ = 0;  // right end of the drawing (room + profile)
+    mrpt::opengl::CPointCloud::Ptr particles_;
+    mrpt::opengl::CSetOfLines::Ptr rays_;
+    mrpt::opengl::CSetOfObjects::Ptr estimate_;
+    mrpt::opengl::CTexturedPlane::Ptr profile_;
+    mrpt::opengl::CText::Ptr profileLabel_;
+    std::thread thread_;
+    std::mutex mtx_;
+    std::optional<Snapshot> next_;
+    std::atomic<bool> stop_{false};
+};
+
+std::string fmt(double v, int prec = 2)
+{
+    char b[64];
+    std::snprintf(b, sizeof(b), "%.*f", prec, v);
+    return b;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return cli::runMain(
+        "wifi-localize",
+        [&]
+        {
+            TCLAP::CmdLine cmd(
+                "Live WiFi localization: runs the sensors of a rawlog-grabber-style .ini "
+                "in-process (CWiFiCSISensor via -p libmrpt_wifi_sensor.so, odometry sensors) and "
+                "MRPT's particle filter with the WiFi bearing map on their observations as they "
+                "arrive. The same .ini holds the pf-localization sections and [wifi-localize] "
+                "(see share/localization/wifi-localize-emulator.ini).",
+                ' ', "0.1");
+            TCLAP::UnlabeledValueArg<std::string> argIni(
+                "config", "sensors + localization .ini", true, "", "CONFIG.ini", cmd);
+            TCLAP::MultiArg<std::string> argPlugin(
+                "p", "plugin", "Plugin module(s) to load first, as rawlog-grabber -p", false,
+                "LIB.so", cmd);
+            TCLAP::ValueArg<std::string> argOut(
+                "o", "out-dir", "Output folder (estimate_tum.txt, summary.txt)", false,
+                "wifi-localize-out", "DIR", cmd);
+            TCLAP::ValueArg<std::string> argRawlog(
+                "r", "rawlog", "Also record every observation seen to this rawlog", false, "",
+                "OUT.rawlog", cmd);
+            TCLAP::ValueArg<double> argDuration(
+                "d", "duration", "Stop after this many seconds (0: until Ctrl+C)", false, 0, "S",
+                cmd);
+            TCLAP::ValueArg<double> argIdle(
+                "", "stop-when-idle",
+                "Stop when no observation arrived for this long, after the first one (replays)",
+                false, 0, "S", cmd);
+            TCLAP::ValueArg<std::string> argGt(
+                "g", "ground-truth-tum",
+                "True trajectory on the sensors' clock: errors in the summary", false, "", "GT.txt",
+                cmd);
+            TCLAP::ValueArg<double> argThr(
+                "", "converged-threshold", "Error [m] below which the filter counts as converged",
+                false, 1.0, "M", cmd);
+            TCLAP::ValueArg<double> argHold(
+                "", "converged-hold", "... and must stay for this long [s]", false, 5.0, "S", cmd);
+            TCLAP::SwitchArg argView("", "view", "Live 3-D window", cmd);
+            TCLAP::ValueArg<std::string> argShot(
+                "", "screenshot", "With --view: save the window to this PNG at the end", false, "",
+                "FILE.png", cmd);
+            TCLAP::SwitchArg argQuiet("q", "quiet", "No status lines", cmd);
+            if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
+                rc >= 0)
+                return rc;
+
+            // ---- plugins, configuration, filter
+            for (const auto& p : argPlugin.getValue())
+            {
+                std::string err;
+                if (!mrpt::system::loadPluginModules(p, err))
+                    throw std::runtime_error("cannot load plugin '" + p + "': " + err);
+            }
+            const std::string iniPath = argIni.getValue();
+            if (!mrpt::system::fileExists(iniPath))
+                throw std::runtime_error("cannot read '" + iniPath + "'");
+            mrpt::config::CConfigFile ini(iniPath);
+            const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
+            LiveLocalizer loc(ini, iniDir);
+            auto fallback = makeFallbackProcessor(ini, iniDir, false);
+            auto lastProfileWanted = Clock::now();
+            std::optional<bearing::BearingProfile> latestProfile;  // for the view
+
+            const std::string outDir = argOut.getValue();
+            mrpt::system::createDirectory(outDir);
+            if (!mrpt::system::directoryExists(outDir))
+                throw std::runtime_error("cannot create " + outDir);
+            std::ofstream tum(outDir + "/estimate_tum.txt");
+            tum << "# wifi-localize estimate (PF mean): t x y z qx qy qz qw\n" << std::flush;
+            std::unique_ptr<RawlogWriter> rawlog;
+            if (argRawlog.isSet()) rawlog = std::make_unique<RawlogWriter>(argRawlog.getValue());
+
+            // ---- sensors: every section with a `driver`, as rawlog-grabber does
+            std::vector<std::unique_ptr<SensorRunner>> sensors;
+            std::vector<std::string> sections;
+            ini.getAllSections(sections);
+            for (const auto& sec : sections)
+            {
+                const std::string driver = ini.read_string(sec, "driver", "");
+                if (driver.empty()) continue;
+                auto r = std::make_unique<SensorRunner>();
+                r->section = sec;
+                r->sensor = mrpt::hwdrivers::CGenericSensor::createSensorPtr(driver);
+                if (!r->sensor)
+                    throw std::runtime_error(
+                        "[" + sec + "] driver = " + driver +
+                        ": no such sensor class (forgot -p libmrpt_wifi_sensor.so?)");
+                r->sensor->loadConfig(ini, sec);
+                sensors.push_back(std::move(r));
+            }
+            // Every section checked before any sensor starts (opens sockets, replays, ...).
+            for (auto& r : sensors) r->sensor->initialize();
+            if (sensors.empty())
+                throw std::runtime_error(
+                    iniPath + ": no sensor section (a section with `driver = ...`)");
+
+            std::signal(SIGINT, onSignal);
+            std::signal(SIGTERM, onSignal);
+            std::atomic<bool> stopSensors{false};
+            for (auto& s : sensors) s->start(stopSensors);
+
+            std::unique_ptr<LiveView> view;
+            if (argView.getValue())
+            {
+                const auto rd = [&](const char* k)
+                { return ini.read_double("LocalizationExperiment", k, 0); };
+                view = std::make_unique<LiveView>(
+                    loc.wifiMap(),
+                    mrpt::math::TPose2D(rd("init_PDF_min_x"), rd("init_PDF_min_y"), 0),
+                    mrpt::math::TPose2D(rd("init_PDF_max_x"), rd("init_PDF_max_y"), 0));
+            }
+
+            // ---- the loop
+            std::set<std::string> sensorBearingLabels;  // CSI labels whose sensor makes bearings
+            std::deque<CObservationWiFiBearing::Ptr> recent;  // last second, for the view
+            std::vector<double> lags;                         // per pose output [s]
+            Trajectory2D est;
+            uint64_t nCsi = 0, nOdo = 0, nBearings = 0, nOther = 0, nFallback = 0;
+            uint64_t secBearings = 0, secPoses = 0, poseOutputs = 0;
+            double newestObs = 0, lastObsWall = 0, firstObsWall = 0, firstObsTime = 0;
+            const auto t0 = Clock::now();
+            auto lastStatus = t0, lastView = t0;
+            const auto elapsed = [&]
+            { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+            // Filter steps with the bearings queued (one per max_bearings_per_step), then one
+            // pose output; also called between observations of a long batch, so a busy
+            // bearing chain can't hold the estimate back.
+            auto lastOutput = Clock::now();
+            const auto filterAndOutput = [&]() -> bool
+            {
+                bool stepped = false;
+                const auto stepStart = Clock::now();
+                while (loc.pendingBearings() > 0 &&
+                       Clock::now() - stepStart < std::chrono::milliseconds(50))
+                    stepped = loc.step() || stepped;
+                lastOutput = Clock::now();
+                if (!stepped) return false;
+                const auto m = loc.mean();
+                const double t = loc.lastStepTime();
+                lags.push_back(nowUnix() - t);
+                ++poseOutputs;
+                ++secPoses;
+                est.push_back(t, m);
+                tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
+                    << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
+                    << std::endl;  // flushed per line
+                return true;
+            };
+            std::string stopReason = "Ctrl+C";
+            std::string lastStatusText = "(no data yet)";
+            while (!g_stop)
+            {
+                if (argDuration.getValue() > 0 && elapsed() >= argDuration.getValue())
+                {
+                    stopReason = "duration reached";
+                    break;
+                }
+                if (argIdle.getValue() > 0 && lastObsWall > 0 &&
+                    elapsed() - lastObsWall > argIdle.getValue())
+                {
+                    stopReason = "no observation for " + fmt(argIdle.getValue(), 1) + " s";
+                    break;
+                }
+                if (view && !view->isOpen())
+                {
+                    stopReason = "window closed";
+                    break;
+                }
+                bool failed = false;
+                for (auto& s : sensors)
+                    if (!s->error.empty())
+                    {
+                        std::cerr << "wifi-localize: sensor [" << s->section << "]: " << s->error
+                                  << "\n";
+                        failed = true;
+                    }
+                if (failed) throw std::runtime_error("a sensor failed (see above)");
+
+                // Everything the sensors have, in time order.
+                std::multimap<mrpt::Clock::time_point, mrpt::serialization::CSerializable::Ptr> all;
+                for (auto& s : sensors)
+                {
+                    mrpt::hwdrivers::CGenericSensor::TListObservations l;
+                    s->sensor->getObservations(l);
+                    all.insert(l.begin(), l.end());
+                }
+                for (auto& [t, o] : all)
+                {
+                    auto obs = std::dynamic_pointer_cast<mrpt::obs::CObservation>(o);
+                    if (!obs) continue;
+                    if (rawlog) rawlog->push(obs);
+                    lastObsWall = elapsed();
+                    if (firstObsWall == 0) firstObsWall = lastObsWall;
+                    newestObs = std::max(newestObs, mrpt::Clock::toDouble(obs->timestamp));
+                    if (firstObsTime == 0) firstObsTime = mrpt::Clock::toDouble(obs->timestamp);
+                    if (auto odo = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obs))
+                    {
+                        ++nOdo;
+                        loc.addOdometry(*odo);
+                    }
+                    else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
+                    {
+                        // The sensor's own live bearings: from now on they replace ours.
+                        const auto& l = b->sensorLabel;
+                        if (l.size() > 4 && l.compare(l.size() - 4, 4, "_AOA") == 0)
+                            sensorBearingLabels.insert(l.substr(0, l.size() - 4));
+                        ++nBearings, ++secBearings;
+                        loc.addBearing(b);
+                        recent.push_back(b);
+                    }
+                    else if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obs))
+                    {
+                        ++nCsi;
+                        // The view shows a bearing-delay profile twice a second: only then
+                        // does the estimator keep one (it costs more than the bearing).
+                        bool keep = false;
+                        if (fallback && view)
+                            fallback->estimator().options().keepProfile = keep =
+                                Clock::now() - lastProfileWanted > std::chrono::milliseconds(500);
+                        if (fallback && !sensorBearingLabels.count(csi->sensorLabel))
+                            if (auto fb = fallback->process(*csi))
+                            {
+                                if (keep && fallback->estimator().lastProfile())
+                                {
+                                    latestProfile = *fallback->estimator().lastProfile();
+                                    lastProfileWanted = Clock::now();
+                                }
+                                ++nFallback, ++nBearings, ++secBearings;
+                                loc.addBearing(fb);
+                                recent.push_back(fb);
+                            }
+                    }
+                    else
+                        ++nOther;
+                    if (Clock::now() - lastOutput > std::chrono::milliseconds(50))
+                        filterAndOutput();
+                }
+                while (!recent.empty() &&
+                       mrpt::Clock::toDouble(recent.front()->timestamp) < newestObs - 1.0)
+                    recent.pop_front();
+
+                if (!filterAndOutput()) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+
+                const auto now = Clock::now();
+                const double sinceStatus = std::chrono::duration<double>(now - lastStatus).count();
+                std::string statusText;
+                if (sinceStatus >= 1.0 || (view && now - lastView > std::chrono::milliseconds(200)))
+                {
+                    const auto m = loc.mean();
+                    statusText =
+                        "t=" + fmt(elapsed(), 1) + "s pose=(" + fmt(m.x) + ", " + fmt(m.y) + ", " +
+                        fmt(mrpt::RAD2DEG(m.phi), 0) + " deg) spread=" + fmt(loc.spread_m()) +
+                        "m bearings/s=" +
+                        fmt(double(secBearings) / std::max(sinceStatus, 1e-3), 0) +
+                        " poses/s=" + fmt(double(secPoses) / std::max(sinceStatus, 1e-3), 1) +
+                        " lag=" +
+                        (lags.empty() ? std::string("-") : fmt(lags.back() * 1e3, 0) + "ms") +
+                        (loc.hasOdometry() ? "" : " (no odometry)");
+                }
+                if (!statusText.empty()) lastStatusText = statusText;
+                if (sinceStatus >= 1.0)
+                {
+                    if (!argQuiet.getValue()) std::cerr << "[wifi-localize] " << statusText << "\n";
+                    secBearings = secPoses = 0;
+                    lastStatus = now;
+                }
+                if (view && now - lastView > std::chrono::milliseconds(200))
+                {
+                    view->post(LiveView::snapshot(
+                        loc, recent, latestProfile ? &*latestProfile : nullptr, statusText));
+                    lastView = now;
+                }
+            }
+            stopSensors = true;
+            for (auto& s : sensors)
+                if (s->thread.joinable()) s->thread.join();
+            if (view && !argShot.getValue().empty())
+            {
+                view->stopThread();
+                view->draw(LiveView::snapshot(
+                    loc, recent, latestProfile ? &*latestProfile : nullptr, lastStatusText));
+                view->screenshot(argShot.getValue(), lastStatusText);
+            }
+
+            if (rawlog) rawlog->close();
+
+            // ---- summary
+            const double runTime = elapsed();
+            const double active = std::max(1e-9, lastObsWall - firstObsWall);
+            std::ostringstream sum;
+            sum << "wifi-localize summary\n"
+                << "  stopped        : " << stopReason << " after " << fmt(runTime, 1) << " s\n"
+                << "  observations   : " << nCsi << " CSI, " << nOdo << " odometry, " << nBearings
+                << " bearings (" << nFallback << " computed by wifi-localize, "
+                << (sensorBearingLabels.empty()
+                        ? std::string("none")
+                        : std::to_string(sensorBearingLabels.size()) + " sensor(s)")
+                << " with own bearings), " << nOther << " other\n"
+                << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n"
+                << "  bearings used  : " << loc.bearingsUsed()
+                << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
+                << "  filter steps   : " << loc.steps() << "\n"
+                << "  pose outputs   : " << poseOutputs << " ("
+                << fmt(double(poseOutputs) / active, 1) << " /s while data flowed)\n"
+                << "  lag [ms]       : p50 " << fmt(percentile(lags, 0.5) * 1e3, 1) << ", p99 "
+                << fmt(percentile(lags, 0.99) * 1e3, 1) << ", max "
+                << fmt(percentile(lags, 1.0) * 1e3, 1)
+                << " (pose output time - timestamp of the newest bearing in it)\n"
+                << "  odometry       : "
+                << (loc.hasOdometry() ? "yes" : "none (unknown motion model)") << "\n";
+            if (argGt.isSet() && !est.empty())
+            {
+                const auto gt = Trajectory2D::fromTumFile(argGt.getValue());
+                std::vector<double> times, errs;
+                for (size_t i = 0; i < est.size(); ++i)
+                {
+                    mrpt::math::TPose2D g;
+                    if (!gt.interpolate(est.t[i], g, 0.5)) continue;
+                    times.push_back(est.t[i] - est.t.front());
+                    errs.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
+                }
+                if (errs.empty())
+                    throw std::runtime_error("the ground truth doesn't overlap the estimate");
+                double tc = -1;  // first time after which the error stays low for `hold` s
+                for (size_t i = 0; i < errs.size() && tc < 0; ++i)
+                {
+                    size_t j = i;
+                    while (j < errs.size() && errs[j] < argThr.getValue() &&
+                           times[j] - times[i] < argHold.getValue())
+                        ++j;
+                    if (j < errs.size() && errs[j] < argThr.getValue()) tc = times[i];
+                }
+                std::vector<double> after;
+                for (size_t i = 0; i < errs.size(); ++i)
+                    if (tc >= 0 && times[i] >= tc) after.push_back(errs[i]);
+                sum << "  error (all)    : " << computeStats(errs).asString() << "\n";
+                if (tc >= 0)
+                    sum << "  converged after: " << fmt(tc) << " s\n"
+                        << "  after converged: " << computeStats(after).asString() << "\n";
+                else
+                    sum << "  converged after: never\n";
+            }
+            std::cout << sum.str();
+            std::ofstream(outDir + "/summary.txt") << sum.str();
+            return 0;
+        });
+}

@@ -1,0 +1,96 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/bayes/CParticleFilter.h>
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/slam/CMonteCarloLocalization2D.h>
+#include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mrpt_wifi::localization
+{
+/** Motion of a robot whose odometry is unknown, for MRPT's particle filter: no displacement,
+ *  a Gaussian random walk of std `maxSpeed · sqrt(dt · 1 s)` in x and y and
+ *  `maxTurnRate · sqrt(dt · 1 s)` in yaw (variance linear in time, so the spread does not depend
+ *  on how often the filter steps; after one second it is the speed bound). */
+mrpt::obs::CActionRobotMovement2D unknownMotionAction(
+    double dt_s, double maxSpeed_mps, double maxTurnRate_rps);
+
+/** Options of the live filter that the pf-localization .ini does not have: section
+ *  `[wifi-localize]` of the same file (all optional). */
+struct LiveLocalizerOptions
+{
+    /** `unknown_motion_speed_mps`, `unknown_motion_turn_dps`: bounds of the motion model when
+     *  there is no odometry. */
+    double unknownMotionSpeed_mps = 1.0;
+    double unknownMotionTurn_rps = mrpt::DEG2RAD(90.0);
+    /** `max_bearings_per_step`: observations per filter step (sensory frame); 0 (default):
+     *  all that are queued. 1 is what the offline wifi-pf-localization does (one step per
+     *  bearing); a step of n bearings applies the odometry noise floor × sqrt(n), the spread n
+     *  single steps would have added, so batching changes the cost, not the model. */
+    size_t maxBearingsPerStep = 0;
+
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
+};
+
+/** MRPT's Monte Carlo localization (CMonteCarloLocalization2D + CParticleFilter) with the WiFi
+ *  bearing map, fed one observation at a time as they arrive, for live use.
+ *
+ *  Configured from the same .ini as pf-localization / wifi-pf-localization
+ *  ([LocalizationExperiment] particles_count and init_PDF_* (mode 1), [PF_options],
+ *  [KLD_options], [DummyOdometryParams], [MetricMap]). Odometry readings accumulate; each
+ *  step() takes the bearings queued since the last one (up to max_bearings_per_step) as one
+ *  sensory frame, with the odometry increment since the last step as the action (Gaussian
+ *  model with the DummyOdometryParams floor, as MRPT's app does), or unknownMotionAction()
+ *  while no odometry has been seen. Not thread-safe. */
+class LiveLocalizer
+{
+public:
+    /** `iniDir`: a relative transmitters_file not found from the working directory is taken
+     *  relative to it. Throws naming the .ini's problem. */
+    LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std::string& iniDir);
+
+    void addOdometry(const mrpt::obs::CObservationOdometry& odo);
+    /** Bearings of unknown transmitters are counted and dropped. */
+    void addBearing(const CObservationWiFiBearing::Ptr& b);
+    size_t pendingBearings() const { return pending_.size(); }
+
+    /** One filter step with the queued bearings; false (nothing done) if there are none. */
+    bool step();
+
+    /** Weighted mean and the particles' spread (sqrt of the largest position variance). */
+    mrpt::math::TPose2D mean() const;
+    double spread_m() const;
+    /** Timestamp of the newest bearing of the last step [s, UNIX]. */
+    double lastStepTime() const { return lastStepTime_; }
+    size_t steps() const { return steps_; }
+    uint64_t bearingsUsed() const { return bearingsUsed_; }
+    uint64_t unknownTransmitter() const { return unknown_; }
+    bool hasOdometry() const { return lastOdo_.has_value(); }
+
+    const mrpt::slam::CMonteCarloLocalization2D& particles() const { return pdf_; }
+    const CWiFiBearingMap& wifiMap() const { return *wifiMap_; }
+
+private:
+    LiveLocalizerOptions opts_;
+    mrpt::maps::CMultiMetricMap::Ptr map_ = std::make_shared<mrpt::maps::CMultiMetricMap>();
+    CWiFiBearingMap::Ptr wifiMap_;
+    mrpt::slam::CMonteCarloLocalization2D pdf_;
+    mrpt::bayes::CParticleFilter pf_;
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
+    std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
+    std::vector<CObservationWiFiBearing::Ptr> pending_;
+    double lastStepTime_ = 0;
+    size_t steps_ = 0;
+    uint64_t bearingsUsed_ = 0, unknown_ = 0;
+};
+
+}  // namespace mrpt_wifi::localization

@@ -1,0 +1,159 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/core/Clock.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/LiveLocalizer.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mrpt_wifi::localization
+{
+mrpt::obs::CActionRobotMovement2D unknownMotionAction(
+    double dt_s, double maxSpeed_mps, double maxTurnRate_rps)
+{
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions m;
+    m.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    m.gaussianModel.a1 = m.gaussianModel.a2 = m.gaussianModel.a3 = m.gaussianModel.a4 = 0;
+    // A random walk: the variance grows linearly with time (std ∝ sqrt(dt)), so the spread
+    // after a second is the same however the second is cut into filter steps; after 1 s the
+    // std is the speed bound itself.
+    const double dt = std::clamp(dt_s, 1e-4, 5.0);
+    m.gaussianModel.minStdXY = maxSpeed_mps * std::sqrt(dt);
+    m.gaussianModel.minStdPHI = maxTurnRate_rps * std::sqrt(dt);
+    mrpt::obs::CActionRobotMovement2D act;
+    act.computeFromOdometry(mrpt::poses::CPose2D(0, 0, 0), m);
+    return act;
+}
+
+void LiveLocalizerOptions::loadFromConfigFile(
+    const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+    unknownMotionSpeed_mps = c.read_double(s, "unknown_motion_speed_mps", unknownMotionSpeed_mps);
+    unknownMotionTurn_rps = mrpt::DEG2RAD(
+        c.read_double(s, "unknown_motion_turn_dps", mrpt::RAD2DEG(unknownMotionTurn_rps)));
+    const int maxPerStep = c.read_int(s, "max_bearings_per_step", int(maxBearingsPerStep));
+    if (!(unknownMotionSpeed_mps > 0) || !(unknownMotionTurn_rps > 0) || maxPerStep < 0)
+        throw std::invalid_argument(
+            "[" + s +
+            "] unknown_motion_speed_mps and unknown_motion_turn_dps must be > 0, "
+            "max_bearings_per_step >= 0");
+    maxBearingsPerStep = size_t(maxPerStep);
+}
+
+LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std::string& iniDir)
+{
+    opts_.loadFromConfigFile(ini, "wifi-localize");
+
+    // The map, as wifi-pf-localization builds it (relative transmitters_file: cwd, then iniDir).
+    const std::string mapSect = "MetricMap_wifiBearingMap_00_creationOpts";
+    mrpt::maps::TSetOfMetricMapInitializers inits;
+    inits.loadFromConfigFile(ini, "MetricMap");
+    for (auto& i : inits)
+        if (auto* w = dynamic_cast<CWiFiBearingMap::TMapDefinition*>(i.get()))
+        {
+            auto& f = w->transmittersFile;
+            if (!f.empty() && f[0] != '/' && !mrpt::system::fileExists(f) &&
+                mrpt::system::fileExists(iniDir + "/" + f))
+                f = iniDir + "/" + f;
+        }
+    map_->setListOfMaps(inits);
+    wifiMap_ = map_->mapByClass<CWiFiBearingMap>();
+    if (!wifiMap_)
+        throw std::runtime_error(
+            "the [MetricMap] section creates no wifiBearingMap (wifiBearingMap_count=1 missing?)");
+    if (wifiMap_->transmitters().empty())
+        throw std::runtime_error(
+            "the WiFi map has no transmitters: set transmitters_file in [" + mapSect + "]");
+
+    const std::string sect = "LocalizationExperiment";
+    const int n = ini.read_int(sect, "particles_count", 0, true);
+    if (n <= 0) throw std::invalid_argument("[LocalizationExperiment] particles_count must be > 0");
+    if (ini.read_int(sect, "init_PDF_mode", 1) != 1)
+        throw std::invalid_argument(
+            "[LocalizationExperiment] init_PDF_mode: wifi-localize needs 1 (uniform in the "
+            "init_PDF_min/max_* box)");
+    const auto rd = [&](const char* k) { return ini.read_double(sect, k, 0, true); };
+    pdf_.resetUniform(
+        rd("init_PDF_min_x"), rd("init_PDF_max_x"), rd("init_PDF_min_y"), rd("init_PDF_max_y"),
+        mrpt::DEG2RAD(ini.read_double(sect, "init_PDF_min_yaw_deg", -180)),
+        mrpt::DEG2RAD(ini.read_double(sect, "init_PDF_max_yaw_deg", 180)), size_t(n));
+    pdf_.options.metricMap = map_;
+    pdf_.options.KLD_params.loadFromConfigFile(ini, "KLD_options");
+    pf_.m_options.loadFromConfigFile(ini, "PF_options");
+
+    odoModel_.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    odoModel_.gaussianModel.minStdXY =
+        ini.read_double("DummyOdometryParams", "minStdXY", odoModel_.gaussianModel.minStdXY);
+    odoModel_.gaussianModel.minStdPHI = mrpt::DEG2RAD(ini.read_double(
+        "DummyOdometryParams", "minStdPHI", mrpt::RAD2DEG(odoModel_.gaussianModel.minStdPHI)));
+}
+
+void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
+{
+    lastOdo_ = odo.odometry;
+    if (!odoAtLastStep_) odoAtLastStep_ = odo.odometry;
+}
+
+void LiveLocalizer::addBearing(const CObservationWiFiBearing::Ptr& b)
+{
+    if (!b) return;
+    if (!wifiMap_->transmitters().find(b->transmitter))
+    {
+        ++unknown_;
+        return;
+    }
+    pending_.push_back(b);
+}
+
+bool LiveLocalizer::step()
+{
+    if (pending_.empty()) return false;
+    std::stable_sort(
+        pending_.begin(), pending_.end(),
+        [](const auto& a, const auto& b) { return a->timestamp < b->timestamp; });
+    const size_t n = opts_.maxBearingsPerStep == 0
+                         ? pending_.size()
+                         : std::min(pending_.size(), opts_.maxBearingsPerStep);
+    mrpt::obs::CSensoryFrame sf;
+    for (size_t i = 0; i < n; ++i) sf.insert(pending_[i]);
+    const double t = mrpt::Clock::toDouble(pending_[n - 1]->timestamp);
+    pending_.erase(pending_.begin(), pending_.begin() + long(n));
+
+    mrpt::obs::CActionCollection acts;
+    if (lastOdo_ && odoAtLastStep_)
+    {
+        // n offline steps would each have added the noise floor: sqrt(n) times it once.
+        auto model = odoModel_;
+        model.gaussianModel.minStdXY *= std::sqrt(double(n));
+        model.gaussianModel.minStdPHI *= std::sqrt(double(n));
+        mrpt::obs::CActionRobotMovement2D act;
+        act.computeFromOdometry(*lastOdo_ - *odoAtLastStep_, model);
+        acts.insert(act);
+        odoAtLastStep_ = lastOdo_;
+    }
+    else
+        acts.insert(unknownMotionAction(
+            steps_ ? t - lastStepTime_ : 0.0, opts_.unknownMotionSpeed_mps,
+            opts_.unknownMotionTurn_rps));
+    pf_.executeOn(pdf_, &acts, &sf);
+    lastStepTime_ = t;
+    ++steps_;
+    bearingsUsed_ += n;
+    return true;
+}
+
+mrpt::math::TPose2D LiveLocalizer::mean() const
+{
+    return pdf_.getMeanVal().asTPose();
+}
+
+double LiveLocalizer::spread_m() const
+{
+    const auto [cov, m] = pdf_.getCovarianceAndMean();
+    return std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+}
+
+}  // namespace mrpt_wifi::localization

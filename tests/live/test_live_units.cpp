@@ -1,0 +1,185 @@
+/* mrpt_wifi — the emulator's odometry stream, CWiFiOdometryUdpSensor, the unknown-motion
+ * model of the live filter. */
+#include <gtest/gtest.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
+#include <mrpt_wifi/emulator/Emulator.h>
+#include <mrpt_wifi/emulator/LoopbackUdp.h>
+#include <mrpt_wifi/localization/LiveLocalizer.h>
+#include <mrpt_wifi/sensor/CWiFiOdometryUdpSensor.h>
+#include <mrpt_wifi/sim/Simulator.h>
+
+#include <thread>
+
+#include "TestSupport.h"
+
+using namespace mrpt_wifi;
+
+namespace
+{
+bool parse(const std::string& text, mrpt::obs::CObservationOdometry& o, uint64_t& seq)
+{
+    return CWiFiOdometryUdpSensor::parseDatagram(
+        reinterpret_cast<const uint8_t*>(text.data()), text.size(), o, seq);
+}
+
+/** A sensor on a free loopback port (udp_port = 0). */
+std::unique_ptr<CWiFiOdometryUdpSensor> makeSensor()
+{
+    mrpt::config::CConfigFileMemory ini(
+        "[ODO]\ndriver = CWiFiOdometryUdpSensor\nsensorLabel = ODO\nudp_port = 0\n");
+    auto s = std::make_unique<CWiFiOdometryUdpSensor>();
+    s->loadConfig(ini, "ODO");
+    s->initialize();
+    return s;
+}
+
+std::vector<mrpt::obs::CObservationOdometry::Ptr> collect(CWiFiOdometryUdpSensor& s)
+{
+    s.doProcess();
+    mrpt::hwdrivers::CGenericSensor::TListObservations l;
+    s.getObservations(l);
+    std::vector<mrpt::obs::CObservationOdometry::Ptr> out;
+    for (const auto& [t, o] : l)
+        out.push_back(std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o));
+    return out;
+}
+}  // namespace
+
+TEST(OdometryDatagram, RoundTripsThroughTheSensorParser)
+{
+    const auto d = emulator::odometryDatagram(
+        41, 12.25, mrpt::math::TPose2D(1.5, -2.25, 0.75), mrpt::math::TTwist2D(0.6, 0.0, -0.3));
+    mrpt::obs::CObservationOdometry o;
+    uint64_t seq = 0;
+    ASSERT_TRUE(parse(d, o, seq)) << d;
+    EXPECT_EQ(seq, 41u);
+    EXPECT_NEAR(o.odometry.x(), 1.5, 1e-9);
+    EXPECT_NEAR(o.odometry.y(), -2.25, 1e-9);
+    EXPECT_NEAR(o.odometry.phi(), 0.75, 1e-7);
+    ASSERT_TRUE(o.hasVelocities);
+    EXPECT_NEAR(o.velocityLocal.vx, 0.6, 1e-9);
+    EXPECT_NEAR(o.velocityLocal.omega, -0.3, 1e-7);
+}
+
+TEST(OdometryDatagram, MalformedDatagramsAreRejected)
+{
+    mrpt::obs::CObservationOdometry o;
+    uint64_t seq = 0;
+    EXPECT_FALSE(parse("", o, seq));
+    EXPECT_FALSE(parse("hello", o, seq));
+    EXPECT_FALSE(parse("MRPT_WIFI_ODO 2 1 0 0 0 0 0 0 0\n", o, seq));       // version
+    EXPECT_FALSE(parse("MRPT_WIFI_ODO 1 1 0 0 0 0 0 0\n", o, seq));         // one short
+    EXPECT_FALSE(parse("MRPT_WIFI_ODO 1 1 0 0 0 0 0 0 0 junk\n", o, seq));  // trailing
+    EXPECT_FALSE(parse("MRPT_WIFI_ODO 1 1 0 nan 0 0 0 0 0\n", o, seq));     // not finite
+    EXPECT_TRUE(parse("MRPT_WIFI_ODO 1 1 0 0 0 0 0 0 0\n", o, seq));
+}
+
+TEST(OdometrySensor, EmitsObservationsCountsGapsAndIgnoresGarbage)
+{
+    auto s = makeSensor();
+    ASSERT_NE(s->boundPort(), 0);
+    emulator::LoopbackUdpSender tx(emulator::loopbackDestination("127.0.0.1", s->boundPort()));
+    for (uint64_t seq : {0, 1, 2, 5})
+    {
+        const auto d = emulator::odometryDatagram(
+            seq, 0.05 * double(seq), mrpt::math::TPose2D(0.1 * double(seq), 0, 0), {});
+        ASSERT_TRUE(tx.send(reinterpret_cast<const uint8_t*>(d.data()), d.size()));
+    }
+    const std::string junk = "not odometry";
+    tx.send(reinterpret_cast<const uint8_t*>(junk.data()), junk.size());
+    std::vector<mrpt::obs::CObservationOdometry::Ptr> got;
+    for (int i = 0; i < 100 && got.size() < 4; ++i)
+    {
+        for (auto& o : collect(*s)) got.push_back(o);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_EQ(got.size(), 4u);
+    EXPECT_EQ(got.back()->sensorLabel, "ODO");
+    EXPECT_NEAR(got.back()->odometry.x(), 0.5, 1e-9);
+    EXPECT_NE(got.back()->timestamp, INVALID_TIMESTAMP);
+    EXPECT_EQ(s->lost(), 2u);  // 3 and 4
+    for (int i = 0; i < 20 && s->malformed() == 0; ++i)
+    {
+        collect(*s);
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    EXPECT_EQ(s->malformed(), 1u);
+}
+
+TEST(OdometrySensor, BadPortIsAnErrorNamingTheSection)
+{
+    mrpt::config::CConfigFileMemory ini("[ODO]\nudp_port = 70000\n");
+    CWiFiOdometryUdpSensor s;
+    try
+    {
+        s.loadConfig(ini, "ODO");
+        FAIL() << "no error";
+    }
+    catch (const std::exception& e)
+    {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("section 'ODO', udp_port = 70000"), std::string::npos) << m;
+    }
+}
+
+TEST(EmulatorOdometry, StreamsTheScenarioOdometryLive)
+{
+    auto s = makeSensor();
+    emulator::EmulatorOptions o;
+    o.scenario = sim::Scenario::fromYamlFile(test::sourceDir() + "/share/scenarios/kidnapped.yaml");
+    o.port = uint16_t(s->boundPort() == 5999 ? 5998 : 5999);  // CSI: nobody listens (loopback)
+    o.odometryPort = s->boundPort();
+    o.duration_s = 1.0;
+    emulator::Emulator emu(o);
+    std::thread th([&] { emu.run(); });
+    std::vector<mrpt::obs::CObservationOdometry::Ptr> got;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+    while (std::chrono::steady_clock::now() < until)
+    {
+        for (auto& x : collect(*s)) got.push_back(x);
+        if (got.size() >= 15) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    th.join();
+    for (auto& x : collect(*s)) got.push_back(x);
+    // 20 Hz over 1 s of wall clock, sent as it happens: the first samples of the scenario.
+    ASSERT_GE(got.size(), 15u);
+    EXPECT_LE(got.size(), 22u);
+    EXPECT_EQ(emu.counters().odometrySent, got.size() + s->lost());
+    sim::Simulator sim(*o.scenario);
+    for (size_t i = 0; i < got.size(); ++i)
+    {
+        const auto& ref = sim.odometry()[i].odometry;
+        EXPECT_NEAR(got[i]->odometry.x(), ref.x, 1e-5) << i;
+        EXPECT_NEAR(got[i]->odometry.y(), ref.y, 1e-5) << i;
+    }
+    // Arrival times follow the 20 Hz schedule (not all at once).
+    const double span = mrpt::Clock::toDouble(got.back()->timestamp) -
+                        mrpt::Clock::toDouble(got.front()->timestamp);
+    EXPECT_GT(span, 0.5);
+}
+
+TEST(EmulatorOdometry, ReplayHasNoOdometryToStream)
+{
+    emulator::EmulatorOptions o;
+    o.replayFile = test::sourceDir() + "/share/samples/sample_4x4_80mhz.pcap";
+    o.odometryPort = 5999;
+    EXPECT_THROW(emulator::Emulator{o}, std::invalid_argument);
+}
+
+TEST(UnknownMotion, RandomWalkSpreadIsIndependentOfTheStepRate)
+{
+    const auto a = localization::unknownMotionAction(0.5, 1.0, mrpt::DEG2RAD(90.0));
+    const auto& pdf = *a.poseChange;
+    mrpt::poses::CPose2D mean;
+    pdf.getMean(mean);
+    EXPECT_NEAR(mean.norm(), 0.0, 1e-12);
+    const auto cov = pdf.getCovariance();
+    EXPECT_NEAR(std::sqrt(cov(0, 0)), std::sqrt(0.5), 0.05);
+    EXPECT_NEAR(std::sqrt(cov(2, 2)), mrpt::DEG2RAD(90.0) * std::sqrt(0.5), 0.05);
+    // Ten steps of 0.05 s spread as much as one of 0.5 s (variance linear in time).
+    const auto b = localization::unknownMotionAction(0.05, 1.0, mrpt::DEG2RAD(90.0));
+    EXPECT_NEAR(10 * b.poseChange->getCovariance()(0, 0), cov(0, 0), 0.02 * cov(0, 0));
+}

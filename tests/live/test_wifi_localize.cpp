@@ -1,0 +1,318 @@
+/* mrpt_wifi — wifi-localize end to end: the emulator (CSI + odometry stream on 127.0.0.1),
+ * the sensors run in-process from an .ini via the plugin, MRPT's particle filter live; errors
+ * against the scenario's ground truth on the receiver's clock (as scripts/demo.sh does). */
+#include <gtest/gtest.h>
+#include <mrpt/img/CImage.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "EmulatorProcess.h"
+#include "SshdFixture.h"
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+
+namespace
+{
+const std::string kShare = test::sourceDir() + "/share";
+
+/** share/localization/wifi-localize-emulator.ini with [section] key values replaced (absolute
+ *  paths, test ports) and sections dropped. */
+std::string deriveIni(
+    const std::map<std::string, std::string>& keys, const std::set<std::string>& dropSections,
+    const std::string& out)
+{
+    std::istringstream in(test::readFile(kShare + "/localization/wifi-localize-emulator.ini"));
+    std::ostringstream o;
+    std::string section;
+    for (std::string line; std::getline(in, line);)
+    {
+        if (!line.empty() && line[0] == '[') section = line.substr(1, line.find(']') - 1);
+        if (dropSections.count(section)) continue;
+        const auto eq = line.find('=');
+        if (eq != std::string::npos && line[0] != ';')
+        {
+            std::string key = line.substr(0, eq);
+            key.erase(key.find_last_not_of(" \t") + 1);
+            if (auto it = keys.find(section + "/" + key); it != keys.end())
+            {
+                o << key << " = " << it->second << "\n";
+                continue;
+            }
+        }
+        o << line << "\n";
+    }
+    std::ofstream(out) << o.str();
+    return out;
+}
+
+std::map<std::string, std::string> baseKeys(uint16_t csiPort, uint16_t odoPort)
+{
+    return {
+        {"WIFI_CSI/udp_port", std::to_string(csiPort)},
+        {"ODOMETRY/udp_port", std::to_string(odoPort)},
+        {"wifi-localize/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
+        {"wifi-localize/bearing_tx_array", kShare + "/arrays/ap-linear-4.yaml"},
+        {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
+         kShare + "/localization/kidnapped-aps.yaml"},
+        // fewer particles than the shipped file: the test shares the machine
+        {"LocalizationExperiment/particles_count", "1500"},
+        {"KLD_options/KLD_minSampleSize", "1500"},
+        {"KLD_options/KLD_maxSampleSize", "1500"}};
+}
+
+double unixTimeAtSimZero(const std::string& stateDir)
+{
+    const std::string j = test::readFile(stateDir + "/summary.json");
+    std::smatch m;
+    if (!std::regex_search(j, m, std::regex("\"unix_time_at_sim_zero\":\\s*([0-9.]+)"))) return NAN;
+    return std::stod(m[1]);
+}
+
+/** The scenario's true trajectory shifted onto the receiver's clock. */
+Trajectory2D truthOnClock(const test::TempDir& tmp, double simZero, double seconds)
+{
+    const auto r = test::run(
+        test::binDir() + "/wifi-sim " + kShare + "/scenarios/kidnapped.yaml /dev/null -q -d " +
+        std::to_string(int(seconds)) + " -t " + tmp.file("truth"));
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    auto gt = Trajectory2D::fromTumFile(tmp.file("truth/trajectory_tum.txt"));
+    const double t0 = gt.t.front();  // wifi-sim's t = 0
+    for (auto& t : gt.t) t = simZero + (t - t0);
+    return gt;
+}
+
+struct Errors
+{
+    std::vector<double> afterWarmup;  // position errors [m] from `warmup` s on
+    size_t estimates = 0;
+    double span = 0;  // s from first to last estimate
+};
+
+Errors errorsOf(const Trajectory2D& est, const Trajectory2D& gt, double warmup)
+{
+    Errors e;
+    e.estimates = est.size();
+    if (est.empty()) return e;
+    e.span = est.t.back() - est.t.front();
+    for (size_t i = 0; i < est.size(); ++i)
+    {
+        mrpt::math::TPose2D g;
+        if (est.t[i] - est.t.front() < warmup || !gt.interpolate(est.t[i], g, 0.5)) continue;
+        e.afterWarmup.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
+    }
+    return e;
+}
+
+double median(std::vector<double> v)
+{
+    if (v.empty()) return NAN;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
+}
+
+struct LiveRun
+{
+    test::CommandResult result;
+    Trajectory2D estimate, truth;
+};
+
+/** The emulator (kidnapped.yaml, preconfigured, optional odometry stream) and wifi-localize
+ *  for `seconds`. */
+LiveRun runLive(
+    const test::TempDir& tmp, double seconds, bool odometry, const std::string& extraArgs = {},
+    const std::string& wrapper = {})
+{
+    const uint16_t csiPort = test::freeLoopbackPort(SOCK_DGRAM);
+    uint16_t odoPort = test::freeLoopbackPort(SOCK_DGRAM);
+    if (odoPort == csiPort) odoPort = uint16_t(csiPort + 1);
+    std::vector<std::string> emuArgs = {
+        "--scenario", kShare + "/scenarios/kidnapped.yaml", "--preconfigured", "155/80"};
+    if (odometry) emuArgs.insert(emuArgs.end(), {"--odometry-port", std::to_string(odoPort)});
+    test::EmulatorProcess emu(emuArgs, csiPort, seconds + 30);
+    EXPECT_TRUE(emu.ready()) << emu.log();
+    const auto ini = deriveIni(
+        baseKeys(csiPort, odoPort),
+        odometry ? std::set<std::string>{} : std::set<std::string>{"ODOMETRY"},
+        tmp.file("live.ini"));
+    LiveRun r;
+    r.result = test::run(
+        "cd " + tmp.path().string() + " && timeout " + std::to_string(int(seconds + 60)) + " " +
+        wrapper + " " + test::binDir() + "/wifi-localize -p " + test::libDir() +
+        "/libmrpt_wifi_sensor.so " + ini + " -q -o out -d " + std::to_string(seconds) + " " +
+        extraArgs);
+    emu.stop();
+    const double zero = unixTimeAtSimZero(emu.stateDir());
+    EXPECT_TRUE(std::isfinite(zero));
+    if (r.result.exitCode == 0 && std::isfinite(zero))
+    {
+        r.estimate = Trajectory2D::fromTumFile(tmp.file("out/estimate_tum.txt"));
+        r.truth = truthOnClock(tmp, zero, seconds + 30);
+    }
+    return r;
+}
+}  // namespace
+
+TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
+{
+    test::TempDir tmp;
+    const auto r = runLive(tmp, 14, true, "-r seen.rawlog");
+    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    EXPECT_NE(r.result.output.find("odometry       : yes"), std::string::npos) << r.result.output;
+    const auto e = errorsOf(r.estimate, r.truth, 5.0);
+    ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
+    // Kidnapped: the filter starts uniform over the room; after 5 s of bearings it must be
+    // where the robot is (the target is a median <= 0.5 m after convergence).
+    EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
+
+    // The rawlog holds what the sensors delivered: CSI of 4 APs and the odometry stream.
+    mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));
+    auto arch = mrpt::serialization::archiveFrom(f);
+    size_t csi = 0, odo = 0;
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            arch >> obj;
+        }
+        catch (const std::exception&)
+        {
+            break;
+        }
+        csi += bool(std::dynamic_pointer_cast<CObservationWiFiCSI>(obj));
+        odo += bool(std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obj));
+    }
+    EXPECT_GT(csi, 2000u);  // 4 x 100 frames/s
+    EXPECT_GT(odo, 150u);   // 20 Hz
+}
+
+TEST(WifiLocalize, RunsWithoutOdometry)
+{
+    test::TempDir tmp;
+    const auto r = runLive(tmp, 14, false);
+    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    EXPECT_NE(r.result.output.find("none (unknown motion model)"), std::string::npos)
+        << r.result.output;
+    const auto e = errorsOf(r.estimate, r.truth, 5.0);
+    ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
+    EXPECT_LE(median(e.afterWarmup), 0.8) << r.result.output;
+}
+
+TEST(WifiLocalize, ViewUnderXvfbShowsMapParticlesAndRays)
+{
+    if (test::run("command -v xvfb-run").exitCode != 0)
+        GTEST_SKIP() << "xvfb-run not installed (scripts/install-deps.sh installs it)";
+    test::TempDir tmp;
+    const auto shot = tmp.file("view.png");
+    const auto r = runLive(
+        tmp, 8, true, "--view --screenshot " + shot, "xvfb-run -a -s '-screen 0 1280x800x24'");
+    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    mrpt::img::CImage img;
+    ASSERT_TRUE(img.loadFromFile(shot)) << r.result.output;
+    ASSERT_EQ(img.getWidth(), 1000u);
+    ASSERT_EQ(img.getHeight(), 700u);
+    // Not a blank picture: the orange bearing rays, the blue particles, the grid, the text.
+    size_t orange = 0, blue = 0;
+    std::set<uint32_t> colours;
+    const auto rgb = img.colorImage();
+    for (unsigned y = 0; y < img.getHeight(); ++y)
+        for (unsigned x = 0; x < img.getWidth(); ++x)
+        {
+            const auto* p = rgb.ptr<uint8_t>(int(x), int(y));  // BGR
+            const int b = p[0], g = p[1], rr = p[2];
+            colours.insert(uint32_t(rr << 16 | g << 8 | b));
+            orange += rr > 180 && g > 80 && g < 190 && b < 90;
+            blue += b > 150 && rr < 120 && b > g + 30;
+        }
+    EXPECT_GT(orange, 1000u);
+    EXPECT_GT(blue, 10u);
+    EXPECT_GT(colours.size(), 100u);
+}
+
+TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
+{
+    // One simulated drive as a tcpdump-style capture (CSI only, no odometry) and as a rawlog.
+    test::TempDir tmp;
+    const double seconds = 10;
+    const auto sim = test::run(
+        test::binDir() + "/wifi-sim " + kShare + "/scenarios/kidnapped.yaml " +
+        tmp.file("sim.rawlog") + " --pcap " + tmp.file("sim.pcap") + " -q -d " +
+        std::to_string(int(seconds)) + " -t " + tmp.file("truth"));
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+
+    // Offline: csi-bearings (AoD, as wifi-localize's own chain in the .ini) and
+    // wifi-pf-localization, bearings only (the capture has no odometry either).
+    const auto bearings = test::run(
+        test::binDir() + "/csi-bearings " + tmp.file("sim.rawlog") + " " + tmp.file("b.rawlog") +
+        " --algo aod --tx-array " + kShare + "/arrays/ap-linear-4.yaml --csv " + tmp.file("b.csv") +
+        " -q");
+    ASSERT_EQ(bearings.exitCode, 0) << bearings.output;
+    std::filesystem::remove(tmp.file("sim.rawlog"));
+    {
+        // The bearings as CSV, odometry "standing still": the filter sees only its noise floor.
+        std::ofstream(tmp.file("still.txt")) << "0 0 0 0 0 0 0 1\n"
+                                             << std::to_string(2e9) << " 0 0 0 0 0 0 1\n";
+    }
+    const auto offIni = tmp.file("off.ini");
+    {
+        std::istringstream in(test::readFile(kShare + "/localization/pf-localization-wifi.ini"));
+        std::ofstream o(offIni);
+        for (std::string line; std::getline(in, line);)
+            o << (line.rfind("use_aoa", 0) == 0 ? std::string("use_aoa = false") : line) << "\n";
+    }
+    const auto off = test::run(
+        test::binDir() + "/wifi-pf-localization " + offIni + " -m " + kShare +
+        "/localization/kidnapped-aps.yaml -b " + tmp.file("b.csv") + " --odometry-tum " +
+        tmp.file("still.txt") + " --sensor-pose 0.1 0 0.4 0 0 0 -n 1500 -q --no-plots -o " +
+        tmp.file("off"));
+    ASSERT_EQ(off.exitCode, 0) << off.output;
+
+    // Live: the capture replayed by CWiFiCSISensor (source = pcap) inside wifi-localize.
+    auto keys = baseKeys(5500, 5501);
+    keys["WIFI_CSI/source"] = "pcap\npcap_file = " + tmp.file("sim.pcap");
+    keys["WIFI_CSI/router_address"] = "";
+    const auto ini = deriveIni(keys, {"ODOMETRY"}, tmp.file("live.ini"));
+    const auto live = test::run(
+        "cd " + tmp.path().string() + " && timeout 120 " + test::binDir() + "/wifi-localize -p " +
+        test::libDir() + "/libmrpt_wifi_sensor.so " + ini + " -q -o live --stop-when-idle 2");
+    ASSERT_EQ(live.exitCode, 0) << live.output;
+
+    const auto a = Trajectory2D::fromTumFile(tmp.file("off/estimate_tum.txt"));
+    auto b = Trajectory2D::fromTumFile(tmp.file("live/estimate_tum.txt"));
+    ASSERT_GT(a.size(), 100u) << off.output;
+    ASSERT_GT(b.size(), 20u) << live.output;
+    // The replay runs on the wall clock: its first frame is the capture's first.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(live.output, m, std::regex("first obs\\. at  : ([0-9.]+)")))
+        << live.output;
+    std::istringstream csv(test::readFile(tmp.file("b.csv")));
+    std::string line;
+    std::getline(csv, line);  // header
+    std::getline(csv, line);
+    const double shift = std::stod(m[1]) - std::stod(line.substr(0, line.find(',')));
+    for (auto& t : b.t) t -= shift;
+    const auto gt = Trajectory2D::fromTumFile(tmp.file("truth/trajectory_tum.txt"));
+    const auto d = errorsOf(b, a, 4.0);  // live vs offline, after 4 s
+    const auto eLive = errorsOf(b, gt, 4.0), eOff = errorsOf(a, gt, 4.0);
+    ASSERT_GT(d.afterWarmup.size(), 10u);
+    // Same place within the filter's randomness (the two differ in step batching and random
+    // draws), and both where the robot is.
+    EXPECT_LE(median(d.afterWarmup), 0.5) << live.output << off.output;
+    EXPECT_LE(median(eLive.afterWarmup), 0.5) << "offline: " << median(eOff.afterWarmup);
+    EXPECT_LE(median(eOff.afterWarmup), 0.5) << "live: " << median(eLive.afterWarmup);
+    std::cout << "live vs offline: median distance " << median(d.afterWarmup)
+              << " m; median error live " << median(eLive.afterWarmup) << " m, offline "
+              << median(eOff.afterWarmup) << " m\n";
+}
