@@ -22,6 +22,10 @@ public:
         double windowMaxAge_s = 1.0;  //!< older frames are not combined
         /** Estimate once every `stride` accepted frames of a transmitter (1: every frame). */
         unsigned stride = 1;
+        /** AoD of a transmitter without a transmit-chain calibration (CleanCsi::txCalibration):
+         *  every real AP's chains have their own unknown phases, so such an AoD is not a
+         *  bearing. false: dropped (hasAod = false); true: reported as the estimator found it. */
+        bool uncalibratedAod = false;
     };
 
     BearingProcessor(
@@ -31,7 +35,9 @@ public:
     void setTransmitterArray(const MacAddress& mac, AntennaArray array);
     void setDefaultTransmitterArray(AntennaArray array);
 
-    /** Runs the chain on one frame. Returns the bearing (sensor label: the CSI's + "_AOA"; its
+    /** Runs the chain on one frame. AoD only for transmitters whose chains are calibrated
+     *  (Options::uncalibratedAod), its σ widened by the calibration's AoD residual. Returns the
+     *  bearing (sensor label: the CSI's + "_AOA"; its
      *  CObservationBearingRange gets "_AOA_BEARING"), or nullptr when the frame was rejected
      *  (`reason` says why), is not due (stride), or the estimator could not produce one. */
     CObservationWiFiBearing::Ptr process(
