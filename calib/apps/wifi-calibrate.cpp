@@ -304,12 +304,18 @@ int main(int argc, char** argv)
             PhaseCalibrator calibrator(array, copt);
             // Transmit chains: one calibrator per multi-antenna access point.
             std::map<MacAddress, PhaseCalibrator> txCalibrators;
+            // The AP's view is less coherent than the receiver's: each stream's phase slope
+            // is fitted on its own (cyclic shifts), and the fits differ a little under
+            // multipath, which decorrelates the band edges. A segment counts as line of sight
+            // at a lower coherence; the AoD errors on the drive are the real check.
+            CalibratorOptions txOpt = copt;
+            txOpt.losCoherence = 0.6;
             TransmitChainFramer framer;
             CalibrationFrame txFrame;
             if (txChains)
                 for (const auto& mac : use)
                     if (siteOf.at(mac)->array->size() >= 2)
-                        txCalibrators.emplace(mac, PhaseCalibrator(*siteOf.at(mac)->array, copt));
+                        txCalibrators.emplace(mac, PhaseCalibrator(*siteOf.at(mac)->array, txOpt));
             std::map<uint32_t, std::vector<CalibrationFrame>> checkFrames;
             std::map<uint32_t, uint64_t> checkSeen;
             const uint64_t checkStride =

@@ -170,15 +170,20 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
             "frames on " + f.chanspec.asString() + " change shape (" + std::to_string(ch.nRx) +
             " → " + std::to_string(n) + " antennas)");
 
-    if (ch.segments.empty() || f.time_s - ch.segments.back().t0 > opts_.segment_s ||
-        f.time_s < ch.segments.back().t0)
+    // One open segment per transmitter: a pose error shifts each transmitter's bearings its own
+    // way, and two transmitters pooled in one covariance would make it rank two.
+    const auto open = ch.openSegment.find(f.transmitter);
+    if (open == ch.openSegment.end() || f.time_s - ch.segments[open->second].t0 > opts_.segment_s ||
+        f.time_s < ch.segments[open->second].t0)
     {
         Segment s;
         s.t0 = f.time_s;
+        s.transmitter = f.transmitter;
         s.R.assign(nSub, Eigen::MatrixXcd::Zero(n, n));
         ch.segments.push_back(std::move(s));
+        ch.openSegment[f.transmitter] = ch.segments.size() - 1;
     }
-    Segment& seg = ch.segments.back();
+    Segment& seg = ch.segments[ch.openSegment[f.transmitter]];
 
     // Suppression by the expected steering (drive mode): conj(a_i(θ, f_k)).
     Eigen::MatrixXcf conjSteer;

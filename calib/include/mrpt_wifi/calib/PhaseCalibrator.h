@@ -161,12 +161,14 @@ private:
         double t0 = 0;
         size_t frames = 0;
         std::vector<Eigen::MatrixXcd> R;  //!< [subcarrier] Σ x x^H
+        MacAddress transmitter;           //!< one transmitter's frames (one geometry) per segment
     };
     struct Channel
     {
         std::shared_ptr<const SubcarrierLayout> layout;
         unsigned nRx = 0;
         std::vector<Segment> segments;
+        std::map<MacAddress, size_t> openSegment;  //!< per transmitter: index into segments
         Eigen::VectorXd antennaPower;
         size_t frames = 0, snapshots = 0;
         double tFirst = 0, tLast = 0;
