@@ -6,8 +6,10 @@
 #      127.0.0.1) by Debian's rawlog-grabber with the CWiFiCSISensor plugin;
 #      Debian's rawlog-edit reads the recording through the observation plugin;
 #   2. calibrate: a short simulated drive of the same router near a known transmitter ->
-#      wifi-calibrate -> the phase calibration file and its report;
-#   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (calibrated);
+#      wifi-calibrate -> the phase calibration file and its report; then a drive among the four
+#      access points -> wifi-calibrate --transmit-chains -> each AP's transmit-chain phases
+#      (without them csi-bearings reports no AoD: every real AP's chains have unknown phases);
+#   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (both sides calibrated);
 #   4. kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap);
 #   5. drift correction: wifi-graphslam on a long drifting drive (share/scenarios/loop.yaml);
 #   6. device mapping: wifi-iot-map on share/scenarios/iot.yaml (its own 2.4 GHz calibration);
@@ -64,8 +66,17 @@ echo "== 2. Calibrate: a 60 s drive of the same router (seed 7) near a transmitt
   --transmitters "$out/calibration_truth/transmitters.yaml" --poses "$out/calibration_truth/trajectory_tum.txt" \
   --out "$out/calib" --report "$out/calib_report" -q
 rm -f "$out/calibration_drive.rawlog"
+# The access points' transmit chains (phase per chain, per boot and channel): a 40 s drive among
+# the same four APs (kidnapped.yaml, seed 7, the APs the emulator plays), true poses.
+"$bin/wifi-sim" "$share/scenarios/kidnapped.yaml" "$out/ap_drive.rawlog" --seed 7 -d 40 \
+  -t "$out/ap_drive_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/ap_drive.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/ap_drive_truth/transmitters.yaml" --poses "$out/ap_drive_truth/trajectory_tum.txt" \
+  --transmit-chains --out "$out/calib_aps" -q | grep -E "^Transmitter|AoD error|written.*transmitters"
+cp -r "$out/calib_aps/transmitters" "$out/calib/"   # the receiver's file stays step 2's
+rm -f "$out/ap_drive.rawlog"
 
-echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs), calibrated"
+echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs), both sides calibrated"
 "$bin/csi-bearings" "$recording" "$out/bearings.rawlog" --algo aod --calib "$out/calib" \
   --tx-array "$share/arrays/ap-linear-4.yaml" --csv "$out/bearings.csv" --images "$out/bearing_images" \
   --image-every 2000 -q
