@@ -86,12 +86,22 @@ echo "== 4. Kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiF
   -g "$out/kidnapped_truth/trajectory_recording_clock.txt" -o "$out/pf" -q | tail -12
 
 echo "== 5. Drift correction: wifi-graphslam on a 5-minute drive with drifting odometry (loop.yaml)"
+# The four APs' transmit chains first, from the first 60 s of the same drive (true poses).
+# They stand in the corners of a 20 x 12 m hall, 10-14 m from the robot, farther than the 8 m
+# wifi-calibrate asks for: it warns, and --force writes them anyway; each file's AoD residual
+# (11-15 deg here) widens every AoD sigma, so the graph weighs these bearings accordingly.
+"$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop_cal.rawlog" -d 60 -t "$out/loop_cal_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/loop_cal.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/loop_cal_truth/transmitters.yaml" --poses "$out/loop_cal_truth/trajectory_tum.txt" \
+  --transmit-chains --force --out "$out/calib_loop" -q 2>/dev/null | grep -E "^Transmitter|AoD error"
+rm -f "$out/loop_cal.rawlog"
 "$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop.rawlog" -d 300 -t "$out/loop_truth" -q >/dev/null
-"$bin/csi-bearings" "$out/loop.rawlog" "$out/loop_bearings.rawlog" --algo aod \
+"$bin/csi-bearings" "$out/loop.rawlog" "$out/loop_bearings.rawlog" --algo aod --calib "$out/calib_loop" \
   --tx-array "$share/arrays/ap-linear-2.yaml" -q
 rm -f "$out/loop.rawlog"
-# AoD only: loop.yaml turns on the 4366c0's inter-antenna jump states, which a fixed receive
-# calibration cannot follow; the APs' own arrays give the angle of departure regardless.
+# AoD only (calibrated transmit chains): loop.yaml turns on the 4366c0's inter-antenna jump
+# states, which a fixed receive calibration cannot follow; the APs' own arrays give the angle of
+# departure regardless.
 "$bin/wifi-graphslam" -r "$out/loop_bearings.rawlog" -a "$share/localization/loop-aps.yaml" --no-aoa \
   -g "$out/loop_truth/trajectory_tum.txt" -o "$out/graphslam" | tail -8
 
