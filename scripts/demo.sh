@@ -6,8 +6,10 @@
 #      127.0.0.1) by Debian's rawlog-grabber with the CWiFiCSISensor plugin;
 #      Debian's rawlog-edit reads the recording through the observation plugin;
 #   2. calibrate: a short simulated drive of the same router near a known transmitter ->
-#      wifi-calibrate -> the phase calibration file and its report;
-#   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (calibrated);
+#      wifi-calibrate -> the phase calibration file and its report; then a drive among the four
+#      access points -> wifi-calibrate --transmit-chains -> each AP's transmit-chain phases
+#      (without them csi-bearings reports no AoD: every real AP's chains have unknown phases);
+#   3. bearings: csi-bearings turns the recording into AoA/AoD bearings (both sides calibrated);
 #   4. kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap);
 #      then live: the emulator (CSI + its odometry stream) -> wifi-localize --view for 30 s
 #      under Xvfb, screenshot in live/live_view.png;
@@ -66,8 +68,17 @@ echo "== 2. Calibrate: a 60 s drive of the same router (seed 7) near a transmitt
   --transmitters "$out/calibration_truth/transmitters.yaml" --poses "$out/calibration_truth/trajectory_tum.txt" \
   --out "$out/calib" --report "$out/calib_report" -q
 rm -f "$out/calibration_drive.rawlog"
+# The access points' transmit chains (phase per chain, per boot and channel): a 40 s drive among
+# the same four APs (kidnapped.yaml, seed 7, the APs the emulator plays), true poses.
+"$bin/wifi-sim" "$share/scenarios/kidnapped.yaml" "$out/ap_drive.rawlog" --seed 7 -d 40 \
+  -t "$out/ap_drive_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/ap_drive.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/ap_drive_truth/transmitters.yaml" --poses "$out/ap_drive_truth/trajectory_tum.txt" \
+  --transmit-chains --out "$out/calib_aps" -q | grep -E "^Transmitter|AoD error|written.*transmitters"
+cp -r "$out/calib_aps/transmitters" "$out/calib/"   # the receiver's file stays step 2's
+rm -f "$out/ap_drive.rawlog"
 
-echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs), calibrated"
+echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs), both sides calibrated"
 "$bin/csi-bearings" "$recording" "$out/bearings.rawlog" --algo aod --calib "$out/calib" \
   --tx-array "$share/arrays/ap-linear-4.yaml" --csv "$out/bearings.csv" --images "$out/bearing_images" \
   --image-every 2000 -q
@@ -114,12 +125,22 @@ if after:
 PY
 
 echo "== 5. Drift correction: wifi-graphslam on a 5-minute drive with drifting odometry (loop.yaml)"
+# The four APs' transmit chains first, from the first 60 s of the same drive (true poses).
+# They stand in the corners of a 20 x 12 m hall, 10-14 m from the robot, farther than the 8 m
+# wifi-calibrate asks for: it warns, and --force writes them anyway; each file's AoD residual
+# (11-15 deg here) widens every AoD sigma, so the graph weighs these bearings accordingly.
+"$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop_cal.rawlog" -d 60 -t "$out/loop_cal_truth" -q >/dev/null
+"$bin/wifi-calibrate" "$out/loop_cal.rawlog" --array "$share/arrays/rt-ac86u.yaml" \
+  --transmitters "$out/loop_cal_truth/transmitters.yaml" --poses "$out/loop_cal_truth/trajectory_tum.txt" \
+  --transmit-chains --force --out "$out/calib_loop" -q 2>/dev/null | grep -E "^Transmitter|AoD error"
+rm -f "$out/loop_cal.rawlog"
 "$bin/wifi-sim" "$share/scenarios/loop.yaml" "$out/loop.rawlog" -d 300 -t "$out/loop_truth" -q >/dev/null
-"$bin/csi-bearings" "$out/loop.rawlog" "$out/loop_bearings.rawlog" --algo aod \
+"$bin/csi-bearings" "$out/loop.rawlog" "$out/loop_bearings.rawlog" --algo aod --calib "$out/calib_loop" \
   --tx-array "$share/arrays/ap-linear-2.yaml" -q
 rm -f "$out/loop.rawlog"
-# AoD only: loop.yaml turns on the 4366c0's inter-antenna jump states, which a fixed receive
-# calibration cannot follow; the APs' own arrays give the angle of departure regardless.
+# AoD only (calibrated transmit chains): loop.yaml turns on the 4366c0's inter-antenna jump
+# states, which a fixed receive calibration cannot follow; the APs' own arrays give the angle of
+# departure regardless.
 "$bin/wifi-graphslam" -r "$out/loop_bearings.rawlog" -a "$share/localization/loop-aps.yaml" --no-aoa \
   -g "$out/loop_truth/trajectory_tum.txt" -o "$out/graphslam" | tail -8
 

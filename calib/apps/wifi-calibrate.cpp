@@ -129,6 +129,14 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argRobust(
                 "", "robust-scale", "Cauchy scale of the robust loss (0: least squares)", false,
                 0.3, "X", cmd);
+            TCLAP::SwitchArg argTxChains(
+                "", "transmit-chains",
+                "Also calibrate the transmit chains of every multi-antenna transmitter listed in "
+                "--transmitters (needs its yaw_deg and array/array_elements): the receiver's "
+                "method mirrored at the AP, from the same drive. Written as "
+                "OUT/transmitters/<mac>/ch<c>_<bw>mhz.yaml; csi-bearings --calib OUT then reports "
+                "AoD for those transmitters",
+                cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
 
             cli::JoinedArgv a1(argc, argv, "--tx-position", 2);
@@ -156,6 +164,17 @@ int main(int argc, char** argv)
             }
             else if (argTxFile.isSet())
                 sites = loadTransmitterSites(argTxFile.getValue());
+            const bool txChains = argTxChains.getValue();
+            if (txChains && (splitter || !argTxFile.isSet() || checking))
+                throw std::invalid_argument(
+                    "--transmit-chains needs a drive with --transmitters FILE (each entry with "
+                    "position, yaw_deg and array), not --static-splitter or --check");
+            if (txChains)
+                for (const auto& s : sites)
+                    if (!s.yaw_rad || !s.array)
+                        throw std::invalid_argument(
+                            argTxFile.getValue() + ": transmitter '" + s.name +
+                            "' needs yaw_deg and array (or array_elements) for --transmit-chains");
             std::optional<MacAddress> onlyMac;
             if (argMac.isSet()) onlyMac = MacAddress::fromString(argMac.getValue());
             std::optional<Chanspec> onlyChannel;
@@ -175,6 +194,7 @@ int main(int argc, char** argv)
 
             // Which transmitters' frames to use, and where each one is.
             std::map<MacAddress, mrpt::math::TPoint2D> txAt;
+            std::map<MacAddress, const TransmitterSite*> siteOf;
             std::set<MacAddress> use;
             if (onlyMac && !summary.transmitters.count(*onlyMac))
                 throw std::runtime_error(
@@ -202,6 +222,7 @@ int main(int argc, char** argv)
                             argTxFile.getValue() + ": transmitter '" + s.name + "' has no mac");
                     if (onlyMac && *s.mac != *onlyMac) continue;
                     txAt[*s.mac] = s.position;
+                    siteOf[*s.mac] = &s;
                     if (summary.transmitters.count(*s.mac)) use.insert(*s.mac);
                 }
                 if (onlyMac && !txAt.count(*onlyMac))
@@ -281,6 +302,20 @@ int main(int argc, char** argv)
             copt.segment_s = argSegment.getValue();
             copt.robustScale = argRobust.getValue();
             PhaseCalibrator calibrator(array, copt);
+            // Transmit chains: one calibrator per multi-antenna access point.
+            std::map<MacAddress, PhaseCalibrator> txCalibrators;
+            // The AP's view is less coherent than the receiver's: each stream's phase slope
+            // is fitted on its own (cyclic shifts), and the fits differ a little under
+            // multipath, which decorrelates the band edges. A segment counts as line of sight
+            // at a lower coherence; the AoD errors on the drive are the real check.
+            CalibratorOptions txOpt = copt;
+            txOpt.losCoherence = 0.6;
+            TransmitChainFramer framer;
+            CalibrationFrame txFrame;
+            if (txChains)
+                for (const auto& mac : use)
+                    if (siteOf.at(mac)->array->size() >= 2)
+                        txCalibrators.emplace(mac, PhaseCalibrator(*siteOf.at(mac)->array, txOpt));
             std::map<uint32_t, std::vector<CalibrationFrame>> checkFrames;
             std::map<uint32_t, uint64_t> checkSeen;
             const uint64_t checkStride =
@@ -323,7 +358,16 @@ int main(int argc, char** argv)
                         if (checkSeen[k]++ % checkStride == 0) checkFrames[k].push_back(frame);
                     }
                     else
+                    {
                         calibrator.add(frame);
+                        const auto tc = txCalibrators.find(obs.transmitter);
+                        if (tc == txCalibrators.end()) return;
+                        const TransmitterSite& site = *siteOf.at(obs.transmitter);
+                        if (framer.make(
+                                frame, {site.position.x, site.position.y, *site.yaw_rad},
+                                unsigned(site.array->size()), txFrame))
+                            tc->second.add(txFrame);
+                    }
                 },
                 {}, [&](double f) { p2.update(f, std::to_string(accepted) + " frames"); });
             p2.done(std::to_string(accepted) + " frames");
@@ -440,6 +484,77 @@ int main(int argc, char** argv)
                 if (argReport.isSet())
                     for (const auto& png : writeCalibrationReport(res, argReport.getValue()))
                         std::cout << "  report           : " << png << "\n";
+            }
+
+            // ---- Transmit chains of each access point ---------------------------------------
+            for (const auto& [mac, tcal] : txCalibrators)
+            {
+                const TransmitterSite& site = *siteOf.at(mac);
+                if (tcal.channels().empty())
+                {
+                    std::cerr << "wifi-calibrate: warning: transmitter " << mac.asString() << " ("
+                              << site.name << "): no frame with all " << site.array->size()
+                              << " streams: its transmit chains are not calibrated\n";
+                    rc = std::max(rc, 2);
+                    continue;
+                }
+                for (const Chanspec& cs : tcal.channels())
+                {
+                    ChannelCalibration res = tcal.solve(cs);
+                    PhaseCalibration& c = res.calibration;
+                    c.role = PhaseCalibration::Role::Transmitter;
+                    c.transmitter = mac;
+                    c.method =
+                        "wifi-calibrate --transmit-chains (receiver's method mirrored at the AP: "
+                        "per-subcarrier PCA + Ceres LM, Cauchy loss)";
+                    // What the calibration leaves on its own drive: a robust RMS of the AoD
+                    // errors (1.4826 · median |e|), added to every AoD σ by csi-bearings.
+                    if (!res.bearingErrorAfter_deg.empty())
+                        c.aodResidual_rad =
+                            1.4826 * quantile(res.bearingErrorAfter_deg, 0.5) / kDeg;
+                    const auto& d = res.diag;
+                    std::cout << "\nTransmitter " << mac.asString() << " (" << site.name << ", "
+                              << site.array->name << ") on " << cs.asString() << ": "
+                              << c.antennas() << " transmit chains\n"
+                              << "  frames           : " << d.frames << " in " << d.segments
+                              << " segments, " << d.bearingBins << " AoD bins of 10 deg, median "
+                              << "distance " << fixed(d.medianDistance_m, 2) << " m\n"
+                              << "  line of sight    : " << fixed(100 * d.losShare, 0)
+                              << " % of frames explained, phase residual "
+                              << fixed(d.residual_rad * kDeg, 2) << " deg RMS\n"
+                              << "  chain offsets    :";
+                    for (size_t i = 0; i < c.antennas(); ++i)
+                        std::cout << " " << i << ":" << fixed(meanPhase(c.phases_rad[i]) * kDeg, 1)
+                                  << "deg";
+                    std::cout << "\n";
+                    if (!res.bearingErrorAfter_deg.empty())
+                        std::cout << "  AoD error        : median "
+                                  << fixed(quantile(res.bearingErrorBefore_deg, 0.5), 2) << " -> "
+                                  << fixed(quantile(res.bearingErrorAfter_deg, 0.5), 2)
+                                  << " deg, p90 "
+                                  << fixed(quantile(res.bearingErrorBefore_deg, 0.9), 2) << " -> "
+                                  << fixed(quantile(res.bearingErrorAfter_deg, 0.9), 2)
+                                  << " deg on the drive (residual for sigma "
+                                  << fixed(c.aodResidual_rad * kDeg, 2) << " deg)\n";
+                    for (const auto& w : res.warnings)
+                        std::cerr << "wifi-calibrate: warning: " << mac.asString() << " "
+                                  << cs.asString() << ": " << w << "\n";
+                    const std::string path =
+                        PhaseCalibration::transmitterPathFor(argOut.getValue(), mac, cs);
+                    if (res.determined() || argForce.getValue())
+                    {
+                        c.saveYamlFile(path);
+                        std::cout << "  written          : " << path
+                                  << (res.determined() ? "" : " (forced despite the warnings)")
+                                  << "\n";
+                    }
+                    else
+                    {
+                        std::cout << "  NOT written      : " << path
+                                  << " (the drive cannot determine it, see the warnings)\n";
+                        rc = 2;
+                    }
+                }
             }
             return rc;
         });

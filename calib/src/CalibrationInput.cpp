@@ -72,6 +72,45 @@ std::vector<TransmitterSite> loadTransmitterSites(const std::string& path)
         {
             throw std::runtime_error(where + ".position: expected two numbers");
         }
+        try
+        {
+            if (e.has("yaw_deg")) s.yaw_rad = e["yaw_deg"].as<double>() * M_PI / 180;
+        }
+        catch (const std::exception&)
+        {
+            throw std::runtime_error(where + ".yaw_deg: expected a number (degrees)");
+        }
+        if (e.has("array"))
+        {
+            std::string file = e["array"].as<std::string>();
+            if (!file.empty() && file[0] != '/')
+                file = mrpt::system::extractFileDirectory(path) + file;
+            try
+            {
+                s.array = AntennaArray::fromYamlFile(file);
+            }
+            catch (const std::exception& ex)
+            {
+                throw std::runtime_error(where + ".array: " + firstLine(ex));
+            }
+        }
+        else if (e.has("array_elements"))
+        {
+            const auto& el = e["array_elements"];
+            if (!el.isSequence())
+                throw std::runtime_error(where + ".array_elements: expected a list");
+            AntennaArray a;
+            a.name = s.name + "-array";
+            for (const auto& p : el.asSequence())
+            {
+                const mrpt::containers::yaml xy(p);
+                if (!xy.isSequence() || xy.asSequence().size() != 2)
+                    throw std::runtime_error(where + ".array_elements: expected [[x, y], ...]");
+                a.elements.push_back(
+                    {xy.asSequence()[0].as<double>(), xy.asSequence()[1].as<double>()});
+            }
+            s.array = a;
+        }
         sites.push_back(s);
     }
     if (sites.empty()) throw std::runtime_error(path + ": the transmitter list is empty");

@@ -73,6 +73,38 @@ RejectReason FramePreparer::prepareStatic(const CObservationWiFiCSI& obs, Calibr
 }
 
 // ---------------------------------------------------------------------------------------------
+bool TransmitChainFramer::make(
+    const CalibrationFrame& f, const mrpt::math::TPose2D& ap, unsigned chains,
+    CalibrationFrame& out)
+{
+    if (!f.hasGeometry || !f.layout || f.nTx != chains || chains < 2) return false;
+    auto& nb = narrowband_[f.layout.get()];
+    if (!nb)
+    {
+        auto l = std::make_shared<SubcarrierLayout>(*f.layout);
+        std::fill(l->frequencies_Hz.begin(), l->frequencies_Hz.end(), l->centerFrequency_Hz);
+        nb = l;
+    }
+    out.time_s = f.time_s;
+    out.transmitter = f.transmitter;
+    out.chanspec = f.chanspec;
+    out.rssi_dBm = f.rssi_dBm;
+    out.nRx = f.nTx;
+    out.nTx = f.nRx;
+    out.layout = nb;
+    out.H.resize(f.H.rows(), f.H.cols());
+    for (unsigned i = 0; i < f.nRx; ++i)
+        for (unsigned m = 0; m < f.nTx; ++m)
+            out.H.row(Eigen::Index(i * f.nTx + m)) = f.H.row(Eigen::Index(m * f.nRx + i));
+    const double dx = f.sensorPose.x - ap.x, dy = f.sensorPose.y - ap.y;
+    out.distance_m = std::hypot(dx, dy);
+    out.expectedAoa_rad = wrapAngle(std::atan2(dy, dx) - ap.phi);
+    out.sensorPose = f.sensorPose;
+    out.hasGeometry = true;
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
 Eigen::MatrixXcf calibrationFactors(
     const PhaseCalibration& c, const SubcarrierLayout& layout, unsigned nRx)
 {
@@ -138,15 +170,20 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
             "frames on " + f.chanspec.asString() + " change shape (" + std::to_string(ch.nRx) +
             " → " + std::to_string(n) + " antennas)");
 
-    if (ch.segments.empty() || f.time_s - ch.segments.back().t0 > opts_.segment_s ||
-        f.time_s < ch.segments.back().t0)
+    // One open segment per transmitter: a pose error shifts each transmitter's bearings its own
+    // way, and two transmitters pooled in one covariance would make it rank two.
+    const auto open = ch.openSegment.find(f.transmitter);
+    if (open == ch.openSegment.end() || f.time_s - ch.segments[open->second].t0 > opts_.segment_s ||
+        f.time_s < ch.segments[open->second].t0)
     {
         Segment s;
         s.t0 = f.time_s;
+        s.transmitter = f.transmitter;
         s.R.assign(nSub, Eigen::MatrixXcd::Zero(n, n));
         ch.segments.push_back(std::move(s));
+        ch.openSegment[f.transmitter] = ch.segments.size() - 1;
     }
-    Segment& seg = ch.segments.back();
+    Segment& seg = ch.segments[ch.openSegment[f.transmitter]];
 
     // Suppression by the expected steering (drive mode): conj(a_i(θ, f_k)).
     Eigen::MatrixXcf conjSteer;

@@ -84,6 +84,8 @@ struct TransmitterStats
 {
     uint64_t frames = 0, bearings = 0;
     std::vector<double> aoa_deg, quality;
+    uint64_t aodEstimated = 0, aodEmitted = 0;  //!< estimator found one / passed the gate
+    uint64_t aodCalibrated = 0;                 //!< emitted with a transmit-chain calibration
     unsigned imagesWritten = 0;
 };
 }  // namespace
@@ -143,6 +145,12 @@ int main(int argc, char** argv)
                 cmd);
             TCLAP::SwitchArg argRequireCalib(
                 "", "require-calib", "Reject frames on channels without calibration", cmd);
+            TCLAP::SwitchArg argUncalibratedAod(
+                "", "uncalibrated-aod",
+                "Report AoD also for transmitters whose transmit chains are not calibrated "
+                "(wifi-calibrate --transmit-chains); such angles are off by tens of degrees on "
+                "real access points",
+                cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Also write the bearings as CSV", false, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argImages(
@@ -188,6 +196,7 @@ int main(int argc, char** argv)
             if (argMinRssi.isSet()) pre.minRssi_dBm = argMinRssi.getValue();
             if (argRequireCalib.getValue()) pre.requireCalibration = true;
             if (argStride.isSet()) cfg.window.stride = std::max(1u, argStride.getValue());
+            if (argUncalibratedAod.getValue()) cfg.window.uncalibratedAod = true;
             CsiPreprocessor preprocessor(pre, rxArray, calib);
 
             bearing::BearingProcessor processor(
@@ -292,6 +301,9 @@ int main(int argc, char** argv)
                 ++st.bearings;
                 st.aoa_deg.push_back(b->aoa_rad * toDeg);
                 st.quality.push_back(b->quality);
+                if (processor.lastResult().hasAod) ++st.aodEstimated;
+                if (b->hasAod) ++st.aodEmitted;
+                if (b->hasAod && processor.lastFrame()->txCalibration) ++st.aodCalibrated;
                 extra.push_back(b);
                 if (!argNoBR.getValue()) extra.push_back(b->asBearingRange());
                 if (csv.is_open())
@@ -300,9 +312,14 @@ int main(int argc, char** argv)
                         << int(b->rssi_dBm) << "," << b->algorithm << "," << std::setprecision(3)
                         << b->aoa_rad * toDeg << "," << b->aoaStd_rad * toDeg << ","
                         << int(b->aoaAmbiguous) << "," << b->aoaMirror_rad * toDeg << ","
-                        << int(b->hasAod) << "," << b->aod_rad * toDeg << ","
-                        << b->aodStd_rad * toDeg << "," << b->aodMirror_rad * toDeg << ","
-                        << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
+                        << int(b->hasAod) << ",";
+                if (csv.is_open() && b->hasAod)
+                    csv << b->aod_rad * toDeg << "," << b->aodStd_rad * toDeg << ","
+                        << b->aodMirror_rad * toDeg << ",";
+                else if (csv.is_open())
+                    csv << ",,,";  // no AoD: empty cells
+                if (csv.is_open())
+                    csv << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
                 const bool picture =
                     (argImages.isSet() || argRawlogImages.getValue()) &&
                     (st.bearings - 1) % std::max(1u, argImageEvery.getValue()) == 0;
@@ -399,6 +416,19 @@ int main(int argc, char** argv)
                           << std::setw(8) << s.bearings << "  " << std::setw(15) << std::fixed
                           << std::setprecision(1) << median(s.aoa_deg) << "  " << std::setw(14)
                           << std::setprecision(2) << median(s.quality) << "\n";
+            for (const auto& [mac, s] : stats)
+                if (s.aodEstimated > s.aodEmitted)
+                    std::cout << "  " << mac.asString() << ": no AoD (" << s.aodEstimated
+                              << " dropped): its transmit chains are not calibrated in "
+                              << (calib.isFolder() ? calib.path() : std::string("--calib DIR"))
+                              << " (wifi-calibrate --transmit-chains; --uncalibrated-aod "
+                                 "reports them anyway)\n";
+                else if (s.aodEmitted > 0)
+                    std::cout << "  " << mac.asString() << ": AoD "
+                              << (s.aodCalibrated == s.aodEmitted
+                                      ? "with its transmit-chain calibration"
+                                      : "uncalibrated (--uncalibrated-aod)")
+                              << "\n";
             uint64_t rejectedTotal = 0;
             for (auto r : rejected) rejectedTotal += r;
             std::cout << "Rejected frames: " << rejectedTotal << "\n";

@@ -173,6 +173,32 @@ CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(const Chanspec& cs, uns
     return caches_.emplace(key, std::move(c)).first->second;
 }
 
+const CsiPreprocessor::TransmitterCache& CsiPreprocessor::transmitterCacheFor(
+    const MacAddress& mac, const SubcarrierLayout& layout, unsigned streams)
+{
+    const Chanspec& cs = layout.chanspec;
+    const auto key =
+        std::make_pair(mac, (uint32_t(cs.centerChannel) << 16) | (uint32_t(cs.bandwidthMHz) << 4));
+    auto it = txCaches_.find(key);
+    if (it != txCaches_.end() && (!it->second.calibration || it->second.factors.rows() >= streams))
+        return it->second;
+    TransmitterCache c;
+    c.calibration = calib_.findTransmitter(mac, cs, streams);
+    if (c.calibration)
+    {
+        const auto chains = Eigen::Index(c.calibration->antennas());
+        c.factors.resize(chains, Eigen::Index(layout.size()));
+        for (Eigen::Index m = 0; m < chains; ++m)
+        {
+            const double gain = std::pow(10.0, -c.calibration->gainAt(size_t(m)) / 20.0);
+            for (size_t j = 0; j < layout.size(); ++j)
+                c.factors(m, Eigen::Index(j)) = std::complex<float>(
+                    std::polar(gain, -c.calibration->phaseAt(size_t(m), layout.subcarriers[j])));
+        }
+    }
+    return txCaches_[key] = std::move(c);
+}
+
 void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
 {
     if (nRx > rxArray_.size())
@@ -312,6 +338,27 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
         // Common phase (CFO): the first row's mean phase becomes zero, for every stream alike.
         const std::complex<float> ref = out.H.row(0).sum();
         if (std::abs(ref) > 0) out.H *= std::conj(ref) / std::abs(ref);
+    }
+
+    // Transmit chains: after the per-stream slope removal, as wifi-calibrate measured them.
+    out.txCalibration = nullptr;
+    if (options_.applyTransmitterCalibration && out.nTx > 1 && !calib_.empty())
+    {
+        const unsigned highest = *std::max_element(out.streamIndex.begin(), out.streamIndex.end());
+        const TransmitterCache& tc = transmitterCacheFor(in.transmitter, layout, highest + 1);
+        if (tc.calibration)
+        {
+            for (unsigned s = 0; s < out.nTx; ++s)
+            {
+                const auto f = tc.factors.row(out.streamIndex[s]);
+                for (unsigned i = 0; i < nRx; ++i)
+                {
+                    auto row = out.H.row(Eigen::Index(s * nRx + i));
+                    row = row.cwiseProduct(f);
+                }
+            }
+            out.txCalibration = tc.calibration;
+        }
     }
 
     // Repair masked subcarriers from their nearest unmasked neighbours (linear, complex).

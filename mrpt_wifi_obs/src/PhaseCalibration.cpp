@@ -96,7 +96,10 @@ PhaseCalibration PhaseCalibration::fromYamlText(
         "subcarriers",
         "phases_rad",
         "gains_db",
-        "subband_sign_corrected"};
+        "subband_sign_corrected",
+        "role",
+        "transmitter",
+        "aod_residual_rad"};
     for (const auto& kv : doc.asMap())
     {
         const std::string key = kv.first.as<std::string>();
@@ -107,12 +110,35 @@ PhaseCalibration PhaseCalibration::fromYamlText(
         "mrpt_wifi_phase_calibration")
         fail(w, "'format' is not mrpt_wifi_phase_calibration");
     const int version = asValue<int>(required(doc, "version", w), "version", w);
-    if (version != kFormatVersion)
+    if (version < 1 || version > kFormatVersion)
         fail(
-            w, "version " + std::to_string(version) + " is not supported (expected " +
+            w, "version " + std::to_string(version) + " is not supported (expected 1 to " +
                    std::to_string(kFormatVersion) + ")");
+    if (version < 2)
+        for (const char* k : {"role", "transmitter", "aod_residual_rad"})
+            if (doc.has(k)) fail(w, std::string("key '") + k + "' needs version 2");
 
     PhaseCalibration c;
+    if (doc.has("role"))
+    {
+        const std::string role = asValue<std::string>(doc["role"], "role", w);
+        if (role == "transmitter")
+            c.role = Role::Transmitter;
+        else if (role != "receiver")
+            fail(w, "role '" + role + "' is neither receiver nor transmitter");
+    }
+    if (c.role == Role::Transmitter)
+    {
+        const std::string mac =
+            asValue<std::string>(required(doc, "transmitter", w), "transmitter", w);
+        const auto parsed = MacAddress::parse(mac);
+        if (!parsed) fail(w, "transmitter '" + mac + "' is not a MAC address");
+        c.transmitter = *parsed;
+        if (doc.has("aod_residual_rad"))
+            c.aodResidual_rad = asValue<double>(doc["aod_residual_rad"], "aod_residual_rad", w);
+    }
+    else if (doc.has("transmitter") || doc.has("aod_residual_rad"))
+        fail(w, "'transmitter' and 'aod_residual_rad' belong to role: transmitter");
     c.device = asValue<std::string>(required(doc, "device", w), "device", w);
     const std::string cs = asValue<std::string>(required(doc, "chanspec", w), "chanspec", w);
     try
@@ -180,6 +206,8 @@ void PhaseCalibration::validate(const std::string& where) const
         for (double p : phases_rad[i])
             if (!std::isfinite(p)) fail(where, "phases_rad holds a non-finite value");
     }
+    if (role == Role::Transmitter && (!std::isfinite(aodResidual_rad) || aodResidual_rad < 0))
+        fail(where, "aod_residual_rad must be finite and >= 0");
     if (!gains_dB.empty() && gains_dB.size() != phases_rad.size())
         fail(
             where, "gains_db has " + std::to_string(gains_dB.size()) + " values for " +
@@ -195,6 +223,10 @@ std::string PhaseCalibration::asYamlText() const
          "# exp(-j*phases_rad[i][k]) * 10^(-gains_db[i]/20) after the sub-band sign correction.\n";
     o << "format: mrpt_wifi_phase_calibration\n";
     o << "version: " << kFormatVersion << "\n";
+    if (role == Role::Transmitter)
+        o << "role: transmitter\n"
+          << "transmitter: '" << transmitter.asString() << "'\n"
+          << "aod_residual_rad: " << aodResidual_rad << "\n";
     o << "device: " << device << "\n";
     o << "chanspec: " << chanspec.asString() << "\n";
     o << "date: " << quoted(date) << "\n";
@@ -282,6 +314,14 @@ std::string PhaseCalibration::pathFor(
     return (fs::path(dir) / device / fileNameFor(cs)).string();
 }
 
+std::string PhaseCalibration::transmitterPathFor(
+    const std::string& dir, const MacAddress& mac, const Chanspec& cs)
+{
+    std::string m = mac.asString();
+    std::replace(m.begin(), m.end(), ':', '-');
+    return (fs::path(dir) / "transmitters" / m / fileNameFor(cs)).string();
+}
+
 CalibrationStore CalibrationStore::open(const std::string& fileOrDir)
 {
     CalibrationStore s;
@@ -309,6 +349,10 @@ const PhaseCalibration* CalibrationStore::find(
 {
     if (single_)
     {
+        if (single_->role == PhaseCalibration::Role::Transmitter)
+            throw CalibrationError(
+                "phase calibration '" + path_ +
+                "' is a transmit-chain calibration: pass the calibration folder");
         single_->checkCompatible(device, cs, nRx);
         return single_.get();
     }
@@ -320,9 +364,43 @@ const PhaseCalibration* CalibrationStore::find(
         std::shared_ptr<PhaseCalibration> c;
         if (fs::exists(p))
             c = std::make_shared<PhaseCalibration>(PhaseCalibration::fromYamlFile(p));
+        if (c && c->role != PhaseCalibration::Role::Receiver)
+            throw CalibrationError(
+                "phase calibration '" + p + "' is a transmit-chain calibration, not a receiver's");
         it = cache_.emplace(p, c).first;
     }
     if (it->second) it->second->checkCompatible(device, cs, nRx);
+    return it->second.get();
+}
+
+const PhaseCalibration* CalibrationStore::findTransmitter(
+    const MacAddress& mac, const Chanspec& cs, size_t streams) const
+{
+    if (dir_.empty()) return nullptr;
+    const std::string p = PhaseCalibration::transmitterPathFor(dir_, mac, cs);
+    auto it = cache_.find(p);
+    if (it == cache_.end())
+    {
+        std::shared_ptr<PhaseCalibration> c;
+        if (fs::exists(p))
+        {
+            c = std::make_shared<PhaseCalibration>(PhaseCalibration::fromYamlFile(p));
+            if (c->role != PhaseCalibration::Role::Transmitter || c->transmitter != mac)
+                throw CalibrationError(
+                    "phase calibration '" + p + "' is not the transmit-chain calibration of " +
+                    mac.asString());
+            if (!c->matchesChannel(cs))
+                throw CalibrationError(
+                    "phase calibration '" + p + "' is for channel " + c->chanspec.asString() +
+                    ", not " + cs.asString());
+        }
+        it = cache_.emplace(p, c).first;
+    }
+    if (it->second && it->second->antennas() < streams)
+        throw CalibrationError(
+            "phase calibration '" + p + "' has " + std::to_string(it->second->antennas()) +
+            " transmit chains, but " + mac.asString() + " sends " + std::to_string(streams) +
+            " streams");
     return it->second.get();
 }
 

@@ -126,7 +126,7 @@ TEST(CalibrationFormat, MalformedFilesAreRejected)
         return s;
     };
     EXPECT_THROW(
-        PhaseCalibration::fromYamlText(replaced("version: 1", "version: 7")), CalibrationError);
+        PhaseCalibration::fromYamlText(replaced("version: 2", "version: 7")), CalibrationError);
     EXPECT_THROW(
         PhaseCalibration::fromYamlText(replaced("antennas: 2", "antennas: 3")), CalibrationError);
     EXPECT_THROW(

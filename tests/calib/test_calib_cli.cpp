@@ -178,3 +178,104 @@ TEST_F(CalibCli, Help)
     EXPECT_EQ(r.rc, 0);
     EXPECT_NE(r.out.find("--static-splitter"), std::string::npos);
 }
+
+namespace
+{
+/** Columns of a csi-bearings CSV: {has_aod, aod_deg} per row. */
+std::vector<std::pair<std::string, std::string>> aodCells(const std::string& csv)
+{
+    std::istringstream in(slurp(csv));
+    std::string line;
+    std::getline(in, line);  // header
+    std::vector<std::pair<std::string, std::string>> out;
+    while (std::getline(in, line))
+    {
+        std::vector<std::string> cells;
+        std::string cell;
+        std::istringstream ls(line);
+        while (std::getline(ls, cell, ',')) cells.push_back(cell);
+        if (cells.size() > 10) out.emplace_back(cells[9], cells[10]);
+    }
+    return out;
+}
+}  // namespace
+
+TEST_F(CalibCli, TransmitChainsAndAodOnlyWhereCalibrated)
+{
+    // One 4-stream AP on a wall facing the room, the robot driving in front of it.
+    const std::string dir = root_ + "/txchains";
+    mrpt::system::createDirectory(dir);
+    std::ofstream(dir + "/scenario.yaml")
+        << "name: txchains\nduration_s: 20\nseed: 31\n"
+           "room:\n  corners: [[0, 0], [14, 0], [14, 10], [0, 10]]\n"
+           "  reflection: {magnitude: 0.35, phase_deg: 180}\n"
+           "transmitters:\n  - {name: ap, mac: '02:11:22:33:44:01', position: [0.3, 5.0],"
+           " yaw_deg: 0, channel: 155/80, streams: 4, array: "
+        << kArrays
+        << "ap-linear-4.yaml}\n"
+           "receiver:\n  array: "
+        << kArrays
+        << "rt-ac86u.yaml\n  sensor_pose: {x: 0.1, y: 0.0, z: 0.4, yaw_deg: 0}\n"
+           "motion:\n  type: random_walk\n  start: [4.0, 5.0, 0]\n  center: [4.0, 5.0]\n"
+           "  radius_m: 3.0\n  speed_mps: 0.6\n  turn_rate_dps: 90\n"
+           "impairments:\n  snr_db: 25\n";
+    ASSERT_EQ(
+        run(kBin + "/wifi-sim -q " + dir + "/scenario.yaml " + dir + "/drive.rawlog -t " + dir +
+            "/truth")
+            .rc,
+        0);
+    const std::string common = dir + "/drive.rawlog --array " + kArrays +
+                               "rt-ac86u.yaml --transmitters " + dir + "/truth/transmitters.yaml";
+
+    // --transmit-chains needs the transmitters' list (with yaw and array).
+    const auto bad =
+        run(cal_ + dir + "/drive.rawlog --array " + kArrays +
+            "rt-ac86u.yaml --tx-position 0.3 5 --transmit-chains --out " + dir + "/x");
+    EXPECT_EQ(bad.rc, 1);
+    EXPECT_NE(bad.err.find("--transmit-chains needs"), std::string::npos) << bad.err;
+
+    const std::string out = dir + "/calib";
+    const auto r =
+        run(cal_ + common + " --poses " + dir +
+            "/truth/trajectory_tum.txt --transmit-chains --out " + out);
+    ASSERT_EQ(r.rc, 0) << r.out << r.err;
+    const std::string txFile = out + "/transmitters/02-11-22-33-44-01/ch155_80mhz.yaml";
+    ASSERT_TRUE(mrpt::system::fileExists(txFile)) << r.out;
+    const auto c = mrpt_wifi::PhaseCalibration::fromYamlFile(txFile);
+    EXPECT_EQ(c.role, mrpt_wifi::PhaseCalibration::Role::Transmitter);
+    EXPECT_EQ(c.antennas(), 4u);
+    EXPECT_GT(c.aodResidual_rad, 0);
+    EXPECT_NE(r.out.find("AoD error"), std::string::npos) << r.out;
+
+    const std::string bearings = kBin + "/csi-bearings -q " + dir +
+                                 "/drive.rawlog /dev/null --algo aod --stride 25 --tx-array " +
+                                 kArrays + "ap-linear-4.yaml ";
+    // Receiver calibrated, transmit chains not: no AoD, empty cells, and the reason.
+    const auto gated =
+        run(bearings + "--calib " + out + "/rt-ac86u/ch155_80mhz.yaml --csv " + dir + "/gated.csv");
+    ASSERT_EQ(gated.rc, 0) << gated.err;
+    EXPECT_NE(gated.out.find("not calibrated"), std::string::npos) << gated.out;
+    const auto g = aodCells(dir + "/gated.csv");
+    ASSERT_GT(g.size(), 50u);
+    for (const auto& [has, aod] : g)
+    {
+        EXPECT_EQ(has, "0");
+        EXPECT_EQ(aod, "");
+    }
+    // --uncalibrated-aod: reported anyway.
+    const auto raw = run(bearings + "--uncalibrated-aod --csv " + dir + "/raw.csv");
+    ASSERT_EQ(raw.rc, 0) << raw.err;
+    EXPECT_NE(raw.out.find("uncalibrated (--uncalibrated-aod)"), std::string::npos) << raw.out;
+    for (const auto& [has, aod] : aodCells(dir + "/raw.csv")) EXPECT_EQ(has, "1");
+    // The calibration folder: AoD with the transmit-chain calibration.
+    const auto cal = run(bearings + "--calib " + out + " --csv " + dir + "/cal.csv");
+    ASSERT_EQ(cal.rc, 0) << cal.err;
+    EXPECT_NE(cal.out.find("with its transmit-chain calibration"), std::string::npos) << cal.out;
+    const auto k = aodCells(dir + "/cal.csv");
+    ASSERT_GT(k.size(), 50u);
+    for (const auto& [has, aod] : k)
+    {
+        EXPECT_EQ(has, "1");
+        EXPECT_NE(aod, "");
+    }
+}

@@ -121,9 +121,11 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     b->aoaStd_rad = res.aoaStd_rad;
     b->aoaAmbiguous = res.aoaAmbiguous;
     b->aoaMirror_rad = res.aoaMirror_rad;
-    b->hasAod = res.hasAod;
+    const PhaseCalibration* txCal = lastFrame_->txCalibration;
+    b->hasAod = res.hasAod && (txCal || opts_.uncalibratedAod);
     b->aod_rad = res.aod_rad;
-    b->aodStd_rad = res.aodStd_rad;
+    // The calibration's own error (what it left on its drive) adds to the estimator's.
+    b->aodStd_rad = txCal ? std::hypot(res.aodStd_rad, txCal->aodResidual_rad) : res.aodStd_rad;
     b->aodAmbiguous = res.aodAmbiguous;
     b->aodMirror_rad = res.aodMirror_rad;
     b->hasDelay = res.hasDelay;

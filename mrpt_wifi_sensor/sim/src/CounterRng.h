@@ -78,7 +78,8 @@ enum RngTag : uint64_t
     kTagTrajectory,
     kTagOdometry,
     kTagNoiseTable,
-    kTagSequence
+    kTagSequence,
+    kTagTxChain = 0x7478  //!< transmit chains ("tx"; apart from the sequential tags)
 };
 
 }  // namespace mrpt_wifi::sim::detail

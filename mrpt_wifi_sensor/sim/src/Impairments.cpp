@@ -163,4 +163,90 @@ void HardwareModel::writeJson(
     o << "]\n" << pad << "}";
 }
 
+// ---------------------------------------------------------------------------------------------
+double vhtCyclicShift_s(unsigned stream)
+{
+    static constexpr double kShift_ns[8] = {0, -400, -200, -600, -350, -650, -100, -750};
+    return stream < 8 ? kShift_ns[stream] * 1e-9 : 0.0;
+}
+
+TransmitterHardware::TransmitterHardware(
+    const ImpairmentSpec& spec, unsigned streams, uint32_t seed, size_t txIndex, unsigned boot)
+    : spec_(spec), streams_(streams), seed_(seed), txIndex_(txIndex), boot_(boot)
+{
+    active_ = streams_ > 1 && (spec_.txChainPhaseOffsets || spec_.txChainGainSigma_dB > 0 ||
+                               spec_.cyclicShiftDelays);
+}
+
+double TransmitterHardware::cyclicShift_s(unsigned m) const
+{
+    return spec_.cyclicShiftDelays && streams_ > 1 ? vhtCyclicShift_s(m) : 0.0;
+}
+
+const TransmitterHardware::ChannelCache& TransmitterHardware::cacheFor(const Chanspec& cs) const
+{
+    const uint16_t key = uint16_t(cs.centerChannel | ((cs.bandwidthMHz / 20) << 8));
+    auto it = cache_.find(key);
+    if (it != cache_.end()) return it->second;
+
+    ChannelCache c;
+    const unsigned nfft = cs.nfft();
+    c.chains.resize(streams_);
+    c.factors.resize(size_t(streams_) * nfft);
+    for (unsigned m = 0; m < streams_; ++m)
+    {
+        ChainResponse& ch = c.chains[m];
+        if (streams_ > 1)
+        {
+            mrpt::random::CRandomGenerator rng(
+                seed32(hashKey({seed_, detail::kTagTxChain, txIndex_, boot_, key, m})));
+            ch.phaseOffset_rad = spec_.txChainPhaseOffsets ? rng.drawUniform(-M_PI, M_PI) : 0.0;
+            ch.gain_dB = rng.drawGaussian1D(0.0, spec_.txChainGainSigma_dB);
+        }
+        const double amp = std::pow(10.0, ch.gain_dB / 20.0);
+        const double shift = cyclicShift_s(m);
+        for (unsigned bin = 0; bin < nfft; ++bin)
+        {
+            const int k = binToSubcarrier(bin, nfft);
+            c.factors[size_t(m) * nfft + bin] = std::complex<float>(std::polar(
+                amp, ch.phaseOffset_rad - 2 * M_PI * double(k) * kSubcarrierSpacingHz * shift));
+        }
+    }
+    return cache_.emplace(key, std::move(c)).first->second;
+}
+
+const ChainResponse& TransmitterHardware::chain(const Chanspec& cs, unsigned m) const
+{
+    return cacheFor(cs).chains.at(m);
+}
+
+const std::vector<std::complex<float>>& TransmitterHardware::streamFactors(const Chanspec& cs) const
+{
+    return cacheFor(cs).factors;
+}
+
+void TransmitterHardware::writeJson(
+    std::ostream& o, const std::vector<Chanspec>& channels, int indent) const
+{
+    const std::string pad(size_t(indent), ' ');
+    o << std::setprecision(10);
+    o << "{\"boot\": " << boot_ << ", \"streams\": " << streams_ << ", \"cyclic_shift_ns\": [";
+    for (unsigned m = 0; m < streams_; ++m) o << (m ? ", " : "") << cyclicShift_s(m) * 1e9;
+    o << "],\n" << pad << "  \"channels\": [";
+    for (size_t c = 0; c < channels.size(); ++c)
+    {
+        o << (c ? "," : "") << "\n"
+          << pad << "    {\"chanspec\": \"" << channels[c].asString() << "\", \"chains\": [";
+        for (unsigned m = 0; m < streams_; ++m)
+        {
+            const ChainResponse& ch = chain(channels[c], m);
+            o << (m ? ", " : "") << "{\"chain\": " << m
+              << ", \"phase_offset_rad\": " << ch.phaseOffset_rad << ", \"gain_db\": " << ch.gain_dB
+              << "}";
+        }
+        o << "]}";
+    }
+    o << "\n" << pad << "  ]}";
+}
+
 }  // namespace mrpt_wifi::sim

@@ -86,6 +86,9 @@ ImpairmentSpec ImpairmentSpec::ideal()
     ImpairmentSpec s;
     s.antennaPhaseOffsets = false;
     s.antennaGainSigma_dB = 0;
+    s.txChainPhaseOffsets = false;
+    s.txChainGainSigma_dB = 0;
+    s.cyclicShiftDelays = false;
     s.rippleAmplitude_rad = 0;
     s.samplingTimeOffsetSigma_s = 0;
     s.cfoCommonPhase = false;
@@ -288,6 +291,9 @@ struct Reader
              "antenna_gain_sigma_db",
              "ripple_deg",
              "ripple_components",
+             "tx_chain_phase_offsets",
+             "tx_chain_gain_sigma_db",
+             "cyclic_shift_delays",
              "sto_sigma_ns",
              "cfo_common_phase",
              "agc_target",
@@ -309,6 +315,9 @@ struct Reader
         s.antennaGainSigma_dB = n.doubleOr("antenna_gain_sigma_db", s.antennaGainSigma_dB);
         s.rippleAmplitude_rad = n.doubleOr("ripple_deg", s.rippleAmplitude_rad / kDeg) * kDeg;
         s.rippleComponents = n.unsignedOr("ripple_components", s.rippleComponents, 16);
+        s.txChainPhaseOffsets = n.boolOr("tx_chain_phase_offsets", s.txChainPhaseOffsets);
+        s.txChainGainSigma_dB = n.doubleOr("tx_chain_gain_sigma_db", s.txChainGainSigma_dB);
+        s.cyclicShiftDelays = n.boolOr("cyclic_shift_delays", s.cyclicShiftDelays);
         s.samplingTimeOffsetSigma_s =
             n.doubleOr("sto_sigma_ns", s.samplingTimeOffsetSigma_s * 1e9) * 1e-9;
         s.cfoCommonPhase = n.boolOr("cfo_common_phase", s.cfoCommonPhase);

@@ -144,6 +144,7 @@ Simulator::Simulator(Scenario scenario) : sc_(std::move(scenario))
         st.framePeriod_s = 1.0 / t.frameRate_Hz;
         detail::CounterRng rng(hashKey({sc_.seed, detail::kTagTxPhase, i}));
         st.phase_s = rng.uniform() * st.framePeriod_s;
+        st.hardware = TransmitterHardware(sc_.impairments, t.streams, sc_.seed, i, 0);
         tx_.push_back(st);
     }
     hardware_ = HardwareModel(
@@ -203,6 +204,13 @@ void Simulator::reboot()
     hardware_ = HardwareModel(
         sc_.impairments, unsigned(sc_.receiver.array.size()), sc_.seed, hardware_.boot() + 1,
         sc_.duration_s);
+}
+
+void Simulator::rebootTransmitter(size_t tx)
+{
+    auto& st = tx_.at(tx);
+    st.hardware = TransmitterHardware(
+        sc_.impairments, sc_.transmitters[tx].streams, sc_.seed, tx, st.hardware.boot() + 1);
 }
 
 bool Simulator::hears(size_t tx) const
@@ -411,6 +419,10 @@ void Simulator::synthesizeFrame(
     const uint32_t frameSalt = noiseKey * 0x9e3779b9u;
     noiseScratchRe_.resize(nfft);
     noiseScratchIm_.resize(nfft);
+    const TransmitterHardware& txHw = tx_[txIndex].hardware;
+    const std::vector<std::complex<float>>* txFactors =
+        txHw.active() ? &txHw.streamFactors(cs) : nullptr;
+    if (txHw.active()) txScratch_.resize(nfft);
     for (unsigned m = 0; m < nTx; ++m)
         for (unsigned i = 0; i < nRx; ++i)
         {
@@ -418,9 +430,14 @@ void Simulator::synthesizeFrame(
             out.setPresent(m, i, !(dead && imp.deadCoresMissing));
             if (dead) continue;  // zeros
             const size_t q = size_t(m) * nRx + i;
-            applyChainFactors(
-                ideal_.data() + q * nfft, rxFactors_.data() + size_t(i) * nfft, nfft,
-                out.pair(m, i));
+            const std::complex<float>* h = ideal_.data() + q * nfft;
+            if (txHw.active())
+            {
+                // Transmit chain m and the stream's cyclic shift first, then the receive chain.
+                applyChainFactors(h, txFactors->data() + size_t(m) * nfft, nfft, txScratch_.data());
+                h = txScratch_.data();
+            }
+            applyChainFactors(h, rxFactors_.data() + size_t(i) * nfft, nfft, out.pair(m, i));
             if (noiseRms <= 0) continue;
             // The noise passes the chain's gains (AGC included) like the signal does.
             const float chainScale =
@@ -469,6 +486,20 @@ void Simulator::writeImpairmentsJson(std::ostream& o) const
          " values are in frames.csv.\",\n";
     o << "  \"hardware\": ";
     hardware_.writeJson(o, channels, 2);
+    o << ",\n  \"transmit_conventions\": \"CSI of transmit stream m is multiplied by"
+         " 10^(gain_db/20)·exp(j·phase_offset_rad) of transmit chain m on the transmitter's"
+         " channel and by exp(-j·2π·k·312.5e3·cyclic_shift_ns·1e-9) (802.11ac VHT cyclic shift)."
+         " Only multi-stream transmitters.\",\n";
+    o << "  \"transmitters\": [";
+    for (size_t t = 0; t < sc_.transmitters.size(); ++t)
+    {
+        const auto& spec = sc_.transmitters[t];
+        o << (t ? "," : "") << "\n    {\"name\": \"" << jsonEscape(spec.name) << "\", \"mac\": \""
+          << spec.mac.asString() << "\", \"hardware\": ";
+        tx_[t].hardware.writeJson(o, {spec.chanspec}, 4);
+        o << "}";
+    }
+    o << "\n  ]";
     o << ",\n  \"per_packet\": {\"sto_sigma_s\": " << imp.samplingTimeOffsetSigma_s
       << ", \"cfo_common_phase\": " << (imp.cfoCommonPhase ? "true" : "false")
       << ", \"agc_target\": " << imp.agcTarget << ", \"agc_sigma_db\": " << imp.agcSigma_dB

@@ -3,6 +3,7 @@
 
 #include <mrpt/math/TPoint2D.h>
 #include <mrpt_wifi/calib/PoseTrack.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 
 #include <functional>
@@ -19,10 +20,16 @@ struct TransmitterSite
     std::string name;
     std::optional<MacAddress> mac;  //!< nullopt: whatever transmitter the frames come from
     mrpt::math::TPoint2D position;
+    /** Boresight of the transmitter's array [rad] (`yaw_deg`), and the array (`array: FILE`,
+     *  relative to the list, or `array_elements: [[x, y], ...]` as wifi-sim writes): needed to
+     *  calibrate its transmit chains. */
+    std::optional<double> yaw_rad;
+    std::optional<AntennaArray> array;
 };
 
 /** Reads a list of transmitters: a YAML map with `transmitters:` listing `name` (optional),
- *  `mac` and `position: [x, y]` (metres); other keys are ignored, so the `transmitters.yaml`
+ *  `mac`, `position: [x, y]` (metres) and, for the transmit chains, `yaw_deg` and `array` or
+ *  `array_elements`; other keys are ignored, so the `transmitters.yaml`
  *  that `wifi-sim --truth-dir` writes can be used directly. Throws std::runtime_error naming
  *  the file and entry. */
 std::vector<TransmitterSite> loadTransmitterSites(const std::string& path);

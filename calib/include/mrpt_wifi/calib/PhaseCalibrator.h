@@ -161,12 +161,14 @@ private:
         double t0 = 0;
         size_t frames = 0;
         std::vector<Eigen::MatrixXcd> R;  //!< [subcarrier] Σ x x^H
+        MacAddress transmitter;           //!< one transmitter's frames (one geometry) per segment
     };
     struct Channel
     {
         std::shared_ptr<const SubcarrierLayout> layout;
         unsigned nRx = 0;
         std::vector<Segment> segments;
+        std::map<MacAddress, size_t> openSegment;  //!< per transmitter: index into segments
         Eigen::VectorXd antennaPower;
         size_t frames = 0, snapshots = 0;
         double tFirst = 0, tLast = 0;
@@ -182,6 +184,30 @@ private:
     AntennaArray array_;
     CalibratorOptions opts_;
     std::map<uint32_t, Channel> channels_;
+};
+
+/** The receiver's method mirrored for an access point's transmit chains: turns a frame prepared
+ *  in drive mode (FramePreparer::prepare, world-frame sensor pose) into a CalibrationFrame of
+ *  the transmitter, for a PhaseCalibrator built with the transmitter's array. Its "antennas" are
+ *  the transmit chains (stream m from chain m), its snapshots the receive antennas, its expected
+ *  bearing the AoD of the robot seen from the AP. The receiver's own offsets are a common factor
+ *  of each snapshot, so the receiver needs no calibration for this.
+ *
+ *  The preprocessing removes each stream's phase slope across subcarriers (cyclic shifts and
+ *  sampling-time offset alike), which also removes the slope of the transmit steering: what
+ *  remains of it is its value at the centre frequency. The frame's layout is therefore replaced
+ *  by one whose frequencies all equal the centre frequency (narrowband expected steering). */
+class TransmitChainFramer
+{
+public:
+    /** False (out untouched) if the frame lacks geometry or does not hold every stream
+     *  0..chains−1 of the transmitter (the calibration needs all chains in every frame). */
+    bool make(
+        const CalibrationFrame& rxFrame, const mrpt::math::TPose2D& apPose, unsigned chains,
+        CalibrationFrame& out);
+
+private:
+    std::map<const SubcarrierLayout*, std::shared_ptr<const SubcarrierLayout>> narrowband_;
 };
 
 /** Calibration factors [rx][subcarrier of the layout]: e^{−jφ}·10^{−g/20}, as CsiPreprocessor

@@ -51,6 +51,10 @@ struct PreprocessOptions
     /** Without a calibration for the frame's channel: reject the frame (true) or use it
      *  uncalibrated (false). */
     bool requireCalibration = false;
+    /** Apply the transmitter's transmit-chain calibration (CalibrationStore::findTransmitter)
+     *  when the store has one for the frame's transmitter and channel, after the sampling-time
+     *  offset removal (the order in which wifi-calibrate --transmit-chains measured it). */
+    bool applyTransmitterCalibration = true;
     /** Use at most this many transmit streams per frame (the first complete ones). */
     unsigned maxStreams = 8;
 };
@@ -86,6 +90,8 @@ struct CleanCsi
     /** CSI [(stream·nRx + rx)][subcarrier index of the layout]. */
     Eigen::MatrixXcf H;
     bool calibrated = false;
+    /** The transmit-chain calibration applied (nullptr: none; AoD is then not trustworthy). */
+    const PhaseCalibration* txCalibration = nullptr;
     double removedSlope_rad = 0;  //!< linear phase removed per subcarrier step (first stream)
     double removedDelay_s = 0;    //!< the same as a delay: −slope / (2π·312.5 kHz)
 
@@ -150,6 +156,14 @@ private:
         bool hasSignCorrection = false;
     };
     ChannelCache& cacheFor(const Chanspec& cs, unsigned nRx);
+    struct TransmitterCache
+    {
+        const PhaseCalibration* calibration = nullptr;
+        Eigen::MatrixXcf factors;  //!< [transmit chain][subcarrier]: e^{−jψ}·10^{−g/20}
+    };
+    const TransmitterCache& transmitterCacheFor(
+        const MacAddress& mac, const SubcarrierLayout& layout, unsigned streams);
+    std::map<std::pair<MacAddress, uint32_t>, TransmitterCache> txCaches_;
 
     PreprocessOptions options_;
     AntennaArray rxArray_;

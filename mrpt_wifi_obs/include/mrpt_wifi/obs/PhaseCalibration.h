@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mrpt_wifi/obs/Chanspec.h>
+#include <mrpt_wifi/obs/MacAddress.h>
 
 #include <cstdint>
 #include <map>
@@ -46,11 +47,26 @@ public:
  * gains_db: [0.0, 0.4, -0.2, 0.1]  # optional, per antenna
  * \endcode
  *
+ *
+ * Version 2 adds the transmit side: `role: transmitter` (default `receiver`), `transmitter:
+ * aa:bb:cc:dd:ee:ff` (the access point, required for that role) and `aod_residual_rad` (RMS
+ * AoD error left on the calibration drive, added to every AoD σ). For a transmitter the rows
+ * are its transmit chains (stream m leaves from chain m), `device` is the name of its array
+ * file, and the CSI of stream m is multiplied by e^{−j·phases_rad[m][k]} · 10^{−gains_db[m]/20}
+ * after the per-stream sampling-time-offset removal (CsiPreprocessing). Version 1 files load as
+ * receiver calibrations.
+ *
  * Folder layout, loaded by channel (CalibrationStore): `DIR/<device>/ch<centre>_<bw>mhz.yaml`,
- * e.g. `calib/rt-ac86u/ch155_80mhz.yaml`, `calib/rt-ac86u/ch36_80mhz.yaml`. */
+ * e.g. `calib/rt-ac86u/ch155_80mhz.yaml`, `calib/rt-ac86u/ch36_80mhz.yaml`; transmitters in
+ * `DIR/transmitters/<mac with dashes>/ch<centre>_<bw>mhz.yaml`. */
 struct PhaseCalibration
 {
-    static constexpr int kFormatVersion = 1;
+    static constexpr int kFormatVersion = 2;
+    enum class Role : uint8_t
+    {
+        Receiver,    //!< the robot's receive array (rows: receive chains)
+        Transmitter  //!< one access point's transmit chains (rows: transmit chains)
+    };
 
     std::string device;
     Chanspec chanspec;
@@ -63,6 +79,9 @@ struct PhaseCalibration
     std::vector<std::vector<double>> phases_rad;  //!< [antenna][index into subcarriers]
     std::vector<double> gains_dB;                 //!< empty or one per antenna
     std::string sourcePath;                       //!< file it was read from
+    Role role = Role::Receiver;
+    MacAddress transmitter;      //!< Role::Transmitter: the access point
+    double aodResidual_rad = 0;  //!< Role::Transmitter: RMS AoD error after calibration
 
     size_t antennas() const { return phases_rad.size(); }
 
@@ -94,6 +113,9 @@ struct PhaseCalibration
     /** `DIR/<device>/ch155_80mhz.yaml` */
     static std::string pathFor(
         const std::string& dir, const std::string& device, const Chanspec& cs);
+    /** `DIR/transmitters/02-00-00-00-01-01/ch155_80mhz.yaml` */
+    static std::string transmitterPathFor(
+        const std::string& dir, const MacAddress& mac, const Chanspec& cs);
 };
 
 /** Where calibrations come from: one file (for one channel) or a folder with the layout above.
@@ -114,6 +136,12 @@ public:
     /** The calibration for (device, channel), or nullptr if there is none for that channel.
      *  Throws CalibrationError if the one found is for another device, or does not fit nRx. */
     const PhaseCalibration* find(const std::string& device, const Chanspec& cs, size_t nRx) const;
+
+    /** The transmit-chain calibration of one access point on a channel (folders only), or
+     *  nullptr. Throws CalibrationError if the file is malformed, for another transmitter or
+     *  channel, or has fewer chains than `streams`. */
+    const PhaseCalibration* findTransmitter(
+        const MacAddress& mac, const Chanspec& cs, size_t streams) const;
 
     /** What the folder holds for a device (file names), for messages. */
     std::vector<std::string> available(const std::string& device) const;

@@ -32,6 +32,10 @@ public:
         double maxWindowRotation_rad = 3.0 * M_PI / 180;
         /** Odometry older than this before the newest CSI frame is forgotten [s]. */
         double odometryHistory_s = 5.0;
+        /** AoD of a transmitter without a transmit-chain calibration (CleanCsi::txCalibration):
+         *  every real AP's chains have their own unknown phases, so such an AoD is not a
+         *  bearing. false: dropped (hasAod = false); true: reported as the estimator found it. */
+        bool uncalibratedAod = false;
     };
 
     BearingProcessor(
@@ -49,7 +53,9 @@ public:
     /** Odometry interpolated at t; nullopt outside the known span (±0.25 s at the ends). */
     std::optional<mrpt::math::TPose2D> odometryAt(mrpt::Clock::time_point t) const;
 
-    /** Runs the chain on one frame. Returns the bearing (sensor label: the CSI's + "_AOA"; its
+    /** Runs the chain on one frame. AoD only for transmitters whose chains are calibrated
+     *  (Options::uncalibratedAod), its σ widened by the calibration's AoD residual. Returns the
+     *  bearing (sensor label: the CSI's + "_AOA"; its
      *  CObservationBearingRange gets "_AOA_BEARING"), or nullptr when the frame was rejected
      *  (`reason` says why), is not due (stride), or the estimator could not produce one. */
     CObservationWiFiBearing::Ptr process(

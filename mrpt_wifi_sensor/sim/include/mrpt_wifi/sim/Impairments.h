@@ -80,6 +80,53 @@ private:
     mutable std::map<uint16_t, ChannelCache> cache_;  // key: channel | bandwidth code
 };
 
+/** 802.11ac VHT cyclic shift [s] of space-time stream `stream` (0-based): 0, −400, −200, −600,
+ *  −350, −650, −100, −750 ns (IEEE 802.11ac Table 22-10, the same for any stream count). */
+double vhtCyclicShift_s(unsigned stream);
+
+/** Transmit chains of one multi-stream transmitter for one of its boots: per channel, per chain
+ *  a phase and gain (separate RF paths: unknown, fixed per boot and channel), and the cyclic
+ *  shift of every space-time stream. Stream m leaves from chain m. A pure function of (seed,
+ *  transmitter index, boot, channel, chain); responses cached, not thread-safe. */
+class TransmitterHardware
+{
+public:
+    TransmitterHardware() = default;
+    TransmitterHardware(
+        const ImpairmentSpec& spec, unsigned streams, uint32_t seed, size_t txIndex, unsigned boot);
+
+    unsigned boot() const { return boot_; }
+    unsigned streams() const { return streams_; }
+    /** False when every factor is 1 (one stream, or everything disabled). */
+    bool active() const { return active_; }
+
+    /** Phase and gain of transmit chain m on a channel (no ripple). */
+    const ChainResponse& chain(const Chanspec& cs, unsigned m) const;
+    /** Cyclic shift of stream m [s] (0 when disabled). */
+    double cyclicShift_s(unsigned m) const;
+    /** 10^{g_m/20}·e^{jψ_m}·e^{−j2π·k·Δf·T_cs,m} for all NFFT bins, [stream][bin]. */
+    const std::vector<std::complex<float>>& streamFactors(const Chanspec& cs) const;
+
+    /** The channels' chains and the cyclic shifts, as JSON. */
+    void writeJson(std::ostream& o, const std::vector<Chanspec>& channels, int indent) const;
+
+private:
+    struct ChannelCache
+    {
+        std::vector<ChainResponse> chains;
+        std::vector<std::complex<float>> factors;
+    };
+    const ChannelCache& cacheFor(const Chanspec& cs) const;
+
+    ImpairmentSpec spec_;
+    unsigned streams_ = 0;
+    uint32_t seed_ = 0;
+    size_t txIndex_ = 0;
+    unsigned boot_ = 0;
+    bool active_ = false;
+    mutable std::map<uint16_t, ChannelCache> cache_;
+};
+
 /** The per-packet draws of one frame. */
 struct PacketImpairments
 {

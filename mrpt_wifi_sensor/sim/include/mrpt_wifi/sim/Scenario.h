@@ -154,6 +154,15 @@ struct ImpairmentSpec
     double rippleAmplitude_rad = 0.08;  //!< RMS of the smooth per-subcarrier phase ripple
     unsigned rippleComponents = 3;      //!< cosine terms across the band
 
+    // Fixed per transmitter, per boot of that transmitter, per channel, per transmit chain
+    // (multi-stream transmitters only): what transmit-chain calibration must recover, and
+    // what AoD does not survive without it (DESIGN.md §5).
+    bool txChainPhaseOffsets = true;   //!< uniform in [−π, π) per transmit chain and channel
+    double txChainGainSigma_dB = 0.5;  //!< per transmit chain gain mismatch
+    /** 802.11ac VHT-LTF cyclic shift per space-time stream (0, −400, −200, −600, −350, −650,
+     *  −100, −750 ns): a linear phase over the subcarriers, per stream. */
+    bool cyclicShiftDelays = true;
+
     // Per packet.
     double samplingTimeOffsetSigma_s = 25e-9;  //!< linear phase across subcarriers (all chains)
     bool cfoCommonPhase = true;                //!< uniform common phase per packet

@@ -96,6 +96,10 @@ public:
     /** A router reboot: new per-chain phase offsets and jump timeline (boot index + 1). */
     void reboot();
     const HardwareModel& hardware() const { return hardware_; }
+    /** A reboot of transmitter tx: new transmit-chain phases and gains (its boot index + 1). */
+    void rebootTransmitter(size_t tx);
+    /** Transmit chains of transmitter tx (its current boot). */
+    const TransmitterHardware& transmitterHardware(size_t tx) const { return tx_.at(tx).hardware; }
 
     /** Time of frame n of transmitter tx (periodic with jitter < one period). */
     double frameTime(size_t tx, uint64_t n) const;
@@ -122,6 +126,7 @@ private:
         double framePeriod_s = 0;
         double phase_s = 0;      //!< time of frame 0
         uint64_t nextFrame = 0;  //!< stream position
+        TransmitterHardware hardware;
     };
 
     /** Whether the receiver, given the channel filter, hears transmitter tx. */
@@ -143,6 +148,7 @@ private:
     std::vector<PropagationPath> paths_;
     std::vector<std::complex<float>> ideal_;
     std::vector<std::complex<float>> rxFactors_;
+    std::vector<std::complex<float>> txScratch_;
     std::vector<uint32_t> noiseTableRe_, noiseTableIm_;  // float bits, see Simulator.cpp
     std::vector<uint32_t> noiseScratchRe_, noiseScratchIm_;
 };
