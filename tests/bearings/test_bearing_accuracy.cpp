@@ -123,7 +123,7 @@ TEST(BearingAccuracyRooms, ReportedSigmaPredictsTheError)
 {
     for (Environment env : {Environment::LineOfSight, Environment::Moderate})
         for (double snr : {10.0, 30.0})
-            for (const char* algo : {"default", "fft", "spotfi", "aoa_only"})
+            for (const char* algo : {"default", "svd", "fft", "spotfi", "aoa_only"})
             {
                 const RoomStats s = summarize(roomErrors(algo, env, snr));
                 std::cout << algo << " " << toString(env) << " " << snr << " dB: ≤2σ "

@@ -321,10 +321,13 @@ protected:
         profile2d_.prepare(rx_, f.nRx, *f.layout, grid_, delays_, opts_.delayDecimation);
     }
 
-    /** Picks the strongest cell; `polishFrames` are what the bearing polish uses. */
+    /** Picks the strongest cell; `polishFrames` are what the bearing polish uses; with
+     *  `followDrift` the estimate follows the window's drift and σ covers it
+     *  (followWindowDrift). */
     bool finishProfile(
         const std::vector<const CleanCsi*>& frames,
-        const std::vector<const CleanCsi*>& polishFrames, double energy, BearingResult& r)
+        const std::vector<const CleanCsi*>& polishFrames, double energy, BearingResult& r,
+        bool followDrift = false)
     {
         const Eigen::MatrixXf& P = profile2d_.power();
         Eigen::Index bi, bj;
@@ -337,8 +340,10 @@ protected:
             delayFilteredCovariances(polishFrames, delay, opts_.frequencyGroups, Rd_);
             theta = polishBartlett(theta, Rd_);
         }
+        const double drift = followDrift ? followWindowDrift(frames, delay, theta) : 0.0;
         sumCovariances(frames, opts_.frequencyGroups, false, R_);
         finish(r, theta, R_, frames);
+        widenByDrift(r, drift);
         // Quality from the profile itself: the matched filter's share of the energy.
         const double nSub = double(layout_->size());
         r.quality = std::clamp(double(pk.value) / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
@@ -347,6 +352,35 @@ protected:
         r.pathsDetected = 1;
         keep2D(P, "Bartlett power", theta, delay);
         return true;
+    }
+
+    /** A window's estimate is its frames' mean bearing; while the robot moves, the path's
+     *  bearing drifts across the window. The bearing of the path at `delay` in the window's
+     *  older and newer half tells how far: a drift below a quarter beamwidth moves `theta` to
+     *  the newest frame (half the drift on). Returns the drift [rad] (0 for windows of fewer
+     *  than 4 frames), which `widenByDrift` adds to σ. */
+    double followWindowDrift(
+        const std::vector<const CleanCsi*>& frames, double delay, double& theta)
+    {
+        if (frames.size() < 4) return 0;
+        const size_t h = frames.size() / 2;
+        halves_[0].assign(frames.begin(), frames.begin() + long(h));
+        halves_[1].assign(frames.end() - long(h), frames.end());
+        double half[2];
+        for (int k = 0; k < 2; ++k)
+        {
+            delayFilteredCovariances(halves_[k], delay, opts_.frequencyGroups, Rh_);
+            half[k] = polishBartlett(theta, Rh_);
+        }
+        const double drift = wrapAngle(half[1] - half[0]);
+        if (std::abs(drift) < 0.25 * beamwidth()) theta += 0.5 * drift;
+        return drift;
+    }
+
+    /** σ covers the window's drift (followWindowDrift), in quadrature. */
+    static void widenByDrift(BearingResult& r, double drift)
+    {
+        r.aoaStd_rad = std::min(std::hypot(r.aoaStd_rad, drift), M_PI / 2);
     }
 
     void keep2D(const Eigen::MatrixXf& P, const std::string& label, double theta, double delay)
@@ -364,6 +398,8 @@ protected:
 
     std::vector<double> delays_;
     AngleDelayProfile profile2d_;
+    std::vector<const CleanCsi*> halves_[2];
+    std::vector<Eigen::MatrixXcd> Rh_;
 };
 
 // =============================================================================================
@@ -424,7 +460,9 @@ public:
         profile2d_.reset();
         profile2d_.accumulate(pc_.H, pc_.nTx);
         const std::vector<const CleanCsi*> pcFrames{&pc_};
-        const bool ok = finishProfile(frames, pcFrames, pc_.H.squaredNorm(), r);
+        // The components average the window: like `default`, follow the path's drift while
+        // the robot moves and let σ cover it.
+        const bool ok = finishProfile(frames, pcFrames, pc_.H.squaredNorm(), r, true);
         r.pathsDetected = unsigned(keep);
         return ok;
     }
@@ -746,27 +784,10 @@ public:
                 }
             }
         }
-        // The robot moves during the window: the path's bearing in the older and the newer
-        // half tells how far it drifted; the estimate (the window's mean) is moved to the
-        // newest frame and the σ covers the drift.
-        double drift = 0;
-        if (frames.size() >= 4)
-        {
-            const size_t h = frames.size() / 2;
-            halves_[0].assign(frames.begin(), frames.begin() + long(h));
-            halves_[1].assign(frames.end() - long(h), frames.end());
-            double half[2];
-            for (int k = 0; k < 2; ++k)
-            {
-                delayFilteredCovariances(halves_[k], chosen.delay, opts_.frequencyGroups, Rh_);
-                half[k] = polishBartlett(theta, Rh_);
-            }
-            drift = wrapAngle(half[1] - half[0]);
-            if (std::abs(drift) < 0.25 * beamwidth()) theta += 0.5 * drift;
-        }
+        const double drift = followWindowDrift(frames, chosen.delay, theta);
         sumCovariances(frames, opts_.frequencyGroups, false, R_);
         finish(r, theta, R_, frames, &Rd_);
-        r.aoaStd_rad = std::min(std::hypot(r.aoaStd_rad, drift), M_PI / 2);
+        widenByDrift(r, drift);
         const double nSub = double(layout_->size());
         r.quality = std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);
         r.hasDelay = true;
@@ -780,8 +801,6 @@ public:
 private:
     SpotFiEstimator spotfi_;
     BearingResult spotfiResult_;
-    std::vector<const CleanCsi*> halves_[2];
-    std::vector<Eigen::MatrixXcd> Rh_;
 };
 
 // =============================================================================================
