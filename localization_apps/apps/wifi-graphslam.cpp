@@ -109,6 +109,7 @@ int main(int argc, char** argv)
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = &in.aps;
                 in.bearings = readBearingCsv(argCsv.getValue(), co, &csvWarn);
+                std::cerr << csvWarn.csvWarning(argCsv.getValue());
             }
             if (argOdo.isSet()) in.odometry = Trajectory2D::fromTumFile(argOdo.getValue());
             mrpt::graphs::CNetworkOfPoses2DInf graph;

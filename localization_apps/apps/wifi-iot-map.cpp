@@ -89,6 +89,7 @@ int main(int argc, char** argv)
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = argTruth.isSet() ? &truth : nullptr;
                 bearings = readBearingCsv(argCsv.getValue(), co, &warn);
+                std::cerr << warn.csvWarning(argCsv.getValue());
             }
             else
             {

@@ -2,8 +2,9 @@
  *
  * wifi-pf-localization: MRPT's pf-localization (mrpt::apps::MonteCarloLocalization_Rawlog, same
  * .ini) linked with the WiFi bearing map, plus what a user wants around it: bearings from a CSV
- * and odometry from a TUM file instead of a rawlog, input checks with counted warnings, the
- * estimated trajectory as TUM, errors against ground truth, time to converge, plots. */
+ * and odometry from a TUM file instead of a rawlog, localization without odometry (UnknownMotion),
+ * input checks with counted warnings, the estimated trajectory as TUM, errors against ground
+ * truth, time to converge from the kidnapping, plots. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/apps/MonteCarloLocalization_App.h>
 #include <mrpt/config/CConfigFile.h>
@@ -18,8 +19,10 @@
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -48,11 +51,15 @@ protected:
         const bool ok =
             DataSourceRawlog::impl_get_next_observations(action, observations, observation);
         // Odometry readings only become the next step's action: not a filter step.
-        if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry) &&
-            observation->timestamp != INVALID_TIMESTAMP && t1_ > t0_)
+        mrpt::Clock::time_point stamp = INVALID_TIMESTAMP;
+        if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry))
+            stamp = observation->timestamp;
+        else if (ok && observations && !observations->empty())
+            stamp = (*observations->begin())->timestamp;
+        if (stamp != INVALID_TIMESTAMP && t1_ > t0_)
         {
             ++steps;
-            const double t = mrpt::Clock::toDouble(observation->timestamp);
+            const double t = mrpt::Clock::toDouble(stamp);
             progress_.update((t - t0_) / (t1_ - t0_), std::to_string(steps) + " steps");
         }
         return ok;
@@ -80,8 +87,10 @@ int main(int argc, char** argv)
             TCLAP::CmdLine cmd(
                 "Global (kidnapped-robot) localization with MRPT's particle filter and the WiFi "
                 "bearing map. Takes the same .ini as pf-localization (see "
-                "share/localization/pf-localization-wifi.ini) and a rawlog of bearing + odometry "
-                "observations, or a bearings CSV + odometry TUM file.",
+                "share/localization/pf-localization-wifi.ini) and a rawlog of bearing (+ "
+                "odometry) observations, or a bearings CSV (+ odometry TUM file). Without "
+                "odometry the robot's motion is an unknown-motion random walk bounded by "
+                "--max-speed (the .ini's [UnknownMotion] section).",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIni(
                 "config", "pf-localization .ini", true, "", "CONFIG.ini", cmd);
@@ -89,11 +98,19 @@ int main(int argc, char** argv)
                 "rawlog", "Rawlog with CObservationWiFiBearing + CObservationOdometry", false, "",
                 "IN.rawlog", cmd);
             TCLAP::ValueArg<std::string> argCsv(
-                "b", "bearings-csv", "Bearings CSV (instead of a rawlog; needs --odometry-tum)",
-                false, "", "B.csv", cmd);
+                "b", "bearings-csv", "Bearings CSV (instead of a rawlog)", false, "", "B.csv", cmd);
             TCLAP::ValueArg<std::string> argOdo(
-                "", "odometry-tum", "Odometry as a TUM file (with --bearings-csv)", false, "",
-                "ODO.txt", cmd);
+                "", "odometry-tum",
+                "Odometry as a TUM file (with --bearings-csv). Optional: without it the motion "
+                "is unknown (see --max-speed)",
+                false, "", "ODO.txt", cmd);
+            TCLAP::ValueArg<double> argMaxSpeed(
+                "", "max-speed",
+                "Without odometry: the robot's top speed [m/s]. Between filter steps dt apart "
+                "the pose takes a zero-mean Gaussian step of sigma = max_speed*sqrt(dt*tau) per "
+                "axis (tau = 1 s), so over any second the walk spreads as far as the robot can "
+                "drive. Overrides [UnknownMotion] max_speed_mps of the .ini (default 0.5)",
+                false, 0.5, "M/S", cmd);
             TCLAP::ValueArg<std::string> argPose(
                 "", "sensor-pose",
                 "Receive array on the robot for CSV bearings: x y z yaw pitch roll (m, deg)", false,
@@ -116,7 +133,8 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argSkip(
                 "", "skip",
                 "Drop the first S seconds of bearings: the filter starts (uniformly, lost) there, "
-                "as if the robot had been kidnapped to wherever it is at that time",
+                "as if the robot had been kidnapped to wherever it is at that time. Times to "
+                "converge and errors.csv count from this kidnapping moment",
                 false, 0.0, "S", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
@@ -167,19 +185,20 @@ int main(int argc, char** argv)
             {
                 if (!rawlog.empty())
                     throw std::invalid_argument("give a rawlog or --bearings-csv, not both");
-                if (!argOdo.isSet())
-                    throw std::invalid_argument("--bearings-csv needs --odometry-tum");
                 BearingCsvOptions co;
                 const auto sp = cli::poseFromText(argPose.getValue(), "--sensor-pose");
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = &txs;
                 bearings = readBearingCsv(argCsv.getValue(), co, &warn);
-                odo = Trajectory2D::fromTumFile(argOdo.getValue());
+                std::cerr << warn.csvWarning(argCsv.getValue());
+                if (argOdo.isSet()) odo = Trajectory2D::fromTumFile(argOdo.getValue());
             }
             else
             {
-                if (rawlog.empty())
-                    throw std::invalid_argument("give a rawlog or --bearings-csv + --odometry-tum");
+                if (rawlog.empty()) throw std::invalid_argument("give a rawlog or --bearings-csv");
+                if (argOdo.isSet())
+                    throw std::invalid_argument(
+                        "--odometry-tum goes with --bearings-csv (a rawlog carries its odometry)");
                 auto c = readRawlog(rawlog);
                 bearings = std::move(c.bearings);
                 odo = std::move(c.odometry);
@@ -191,11 +210,24 @@ int main(int argc, char** argv)
                                  "information)\n";
             }
             if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
+            // Without odometry: the unknown-motion random walk, from the .ini's [UnknownMotion]
+            // section, --max-speed overriding.
+            UnknownMotion motion;
             if (odo.empty())
-                std::cerr << "warning: no odometry: the filter will use the .ini's "
-                             "[DummyOdometryParams] motion noise only\n";
+            {
+                motion.loadFromConfigFile(ini, "UnknownMotion");
+                if (argMaxSpeed.isSet()) motion.maxSpeed_mps = argMaxSpeed.getValue();
+                motion.validate();
+                std::cerr << "note: no odometry: the motion model is the unknown-motion "
+                          << motion.asString() << "\n";
+            }
             std::vector<BearingRecord> usable;
-            const double tSkip = bearings.front().t + argSkip.getValue();
+            // The kidnapping moment: the filter starts lost (uniform particles) here.
+            const double tSkip = std::min_element(
+                                     bearings.begin(), bearings.end(),
+                                     [](const auto& a, const auto& b) { return a.t < b.t; })
+                                     ->t +
+                                 argSkip.getValue();
             for (const auto& b : bearings)
             {
                 if (b.t < tSkip) continue;
@@ -215,7 +247,13 @@ int main(int argc, char** argv)
                 throw std::runtime_error(
                     "no usable bearings: " + warn.summary() +
                     " (check the map's MACs and that odometry and bearings overlap in time)");
-            if (argCsv.isSet() || warn.total() || otherObs || argSkip.getValue() > 0)
+            if (odo.empty())
+            {
+                // Action/sensory-frame rawlog: each step's action is the random walk over dt.
+                rawlog = outDir + "/input.rawlog";
+                writePfRawlogUnknownMotion(rawlog, usable, motion);
+            }
+            else if (argCsv.isSet() || warn.total() || otherObs || argSkip.getValue() > 0)
             {
                 // The filter reads a rawlog: write the checked input as one.
                 rawlog = outDir + "/input.rawlog";
@@ -256,7 +294,10 @@ int main(int argc, char** argv)
             std::ostringstream sum;
             sum << "wifi-pf-localization summary\n"
                 << "  input          : " << usable.size() << " bearings of " << txs.size()
-                << " known transmitters, " << odo.size() << " odometry readings\n"
+                << " known transmitters, "
+                << (odo.empty() ? "no odometry (" + motion.asString() + ")"
+                                : std::to_string(odo.size()) + " odometry readings")
+                << "\n"
                 << "  warnings       : " << warn.summary() << "\n"
                 << "  particles      : " << counts << "\n"
                 << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
@@ -270,21 +311,28 @@ int main(int argc, char** argv)
                 {
                     mrpt::math::TPose2D g;
                     if (!gt.interpolate(est.t[i], g, 0.5)) continue;
-                    times.push_back(est.t[i] - t0);
+                    times.push_back(est.t[i] - tSkip);
                     errs.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
                 }
                 if (errs.empty())
                     throw std::runtime_error("the ground truth doesn't overlap the estimate");
-                // Converged: first time after which the error stays below the threshold for
-                // `hold` seconds.
+                // Time to converge, from the kidnapping moment t_k (the start of the input after
+                // --skip, when the filter is started lost with particles spread uniformly):
+                // t_c - t_k, where t_c is the time of the first estimate from which the error
+                // stays below the threshold for `hold` seconds (the whole window must lie inside
+                // the run). Each estimate is the PF mean after that step's bearings, so a filter
+                // that converges on its first step reports ~0 s: the summary adds the number of
+                // filter steps and the first estimate's error to tell those apart.
                 double tc = -1;
+                size_t stepsToConverge = 0;
                 for (size_t i = 0; i < errs.size() && tc < 0; ++i)
                 {
                     size_t j = i;
                     while (j < errs.size() && errs[j] < argThr.getValue() &&
                            times[j] - times[i] < argHold.getValue())
                         ++j;
-                    if (j < errs.size() && errs[j] < argThr.getValue()) tc = times[i];
+                    if (j < errs.size() && errs[j] < argThr.getValue())
+                        tc = times[i], stepsToConverge = i + 1;
                 }
                 std::vector<double> after;
                 for (size_t i = 0; i < errs.size(); ++i)
@@ -292,14 +340,18 @@ int main(int argc, char** argv)
                 const auto all = computeStats(errs), conv = computeStats(after);
                 {
                     std::ofstream f(outDir + "/errors.csv");
+                    f << "# t_s: seconds since the kidnapping moment (filter start, UNIX "
+                      << fmt(tSkip, 3) << ")\n";
                     f << "t_s,position_error_m\n";
                     for (size_t i = 0; i < errs.size(); ++i)
                         f << times[i] << "," << errs[i] << "\n";
                 }
                 sum << "  error (all)    : " << all.asString() << "\n";
                 if (tc >= 0)
-                    sum << "  converged after: " << fmt(tc, 2) << " s (error < "
-                        << argThr.getValue() << " m for " << argHold.getValue() << " s)\n"
+                    sum << "  converged after: " << fmt(tc, 2) << " s from the kidnapping ("
+                        << stepsToConverge << " filter steps; error < " << argThr.getValue()
+                        << " m for " << argHold.getValue() << " s; first estimate's error "
+                        << fmt(errs.front(), 2) << " m)\n"
                         << "  after converged: " << conv.asString() << "\n"
                         << "  target         : median after convergence <= 0.5 m (WiROS 1.2 m): "
                         << (conv.median <= 0.5 ? "MET" : "NOT MET") << "\n";

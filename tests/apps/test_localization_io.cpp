@@ -50,17 +50,31 @@ TEST(LocalizationCsv, ReadsColumnsInAnyOrderWithEmptyCells)
 
 TEST(LocalizationCsv, ReadsCsiBearingsCsvWithFlagColumns)
 {
-    // The layout `csi-bearings --csv` writes: zeros in the cells of what wasn't measured.
+    // The layout `csi-bearings --csv` writes: empty cells for what wasn't measured (row 3);
+    // older versions wrote zeros there (row 1): the 0 flag wins, and the reader counts the
+    // disowned cells so the apps can warn about them.
     const auto path = writeTemp(
         "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,aoa_ambiguous,"
         "aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,delay_ns,quality,frames\n"
         "1700000000.06,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,1,151.8,0,0.000,0.000,0.000,"
         "0,0.88,1\n"
-        "1700000000.07,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,151.8,1,10,3,170,0,0.88,1\n");
-    const auto r = readBearingCsv(path, {});
-    ASSERT_EQ(r.size(), 2u);
+        "1700000000.07,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,151.8,1,10,3,170,0,0.88,1\n"
+        "1700000000.08,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,,0,,,,0,0.88,1\n");
+    InputWarnings w;
+    const auto r = readBearingCsv(path, {}, &w);
+    ASSERT_EQ(r.size(), 3u);
     EXPECT_TRUE(r[0].hasAoa && r[0].aoaAmbiguous && !r[0].hasAod);
     EXPECT_TRUE(!r[1].aoaAmbiguous && r[1].hasAod && r[1].aodAmbiguous);
+    EXPECT_TRUE(r[2].hasAoa && !r[2].aoaAmbiguous && !r[2].hasAod);
+    EXPECT_EQ(w.flaggedOffAngles, 1u);
+    EXPECT_NE(w.csvWarning("b.csv").find("b.csv: 1 rows"), std::string::npos);
+    EXPECT_NE(w.summary().find("1 angle cells flagged"), std::string::npos);
+    InputWarnings clean;
+    readBearingCsv(
+        writeTemp("timestamp,transmitter,has_aod,aoa_deg,aod_deg\n"
+                  "1700000000.0,02:00:00:00:03:02,0,10,\n"),
+        {}, &clean);
+    EXPECT_TRUE(clean.csvWarning("b.csv").empty());
 }
 
 TEST(LocalizationCsv, ErrorsNameTheLine)
