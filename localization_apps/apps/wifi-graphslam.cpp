@@ -155,8 +155,11 @@ int main(int argc, char** argv)
                 << " AoD edges\n"
                 << "  warnings  : " << res.warnings.summary() << "; " << res.apsWithoutBearings
                 << " APs without bearings\n"
-                << "  solver    : " << res.solverReport << "\n"
-                << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
+                << "  solver    : " << res.solverReport << "\n";
+            if (opt.apsKnown)
+                sum << "  start     : " << res.placement << " (lowest final cost of "
+                    << res.hypotheses << " optimised starts)\n";
+            sum << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
                 << " s\n";
             if (argGt.isSet())
             {
