@@ -361,7 +361,7 @@ GraphSlamResult solveOnce(
                 " has no odometry path to node 0)");
 
     auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
-    std::vector<bool> apUsed(A.size(), false);
+    std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     for (const auto& a : att)
     {
         const auto it = apIndex.find(a.b->transmitter);
@@ -387,7 +387,7 @@ GraphSlamResult solveOnce(
                         a.b->aodAmbiguous}),
                 detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
             res.aodEdges++;
-            apUsed[it->second] = true;
+            apUsed[it->second] = apAod[it->second] = true;
         }
     }
     if (res.aoaEdges + res.aodEdges == 0)
@@ -395,7 +395,10 @@ GraphSlamResult solveOnce(
     for (size_t j = 0; j < A.size(); ++j)
     {
         if (!apUsed[j]) res.apsWithoutBearings++;
-        if (opt.apsKnown || !apUsed[j]) problem.SetParameterBlockConstant(A[j].data());
+        if (opt.apsKnown || !apUsed[j])
+            problem.SetParameterBlockConstant(A[j].data());
+        else if (!apAod[j])  // AoA only: the AP's yaw is unobservable, keep it out
+            problem.SetManifold(A[j].data(), new ceres::SubsetManifold(3, {2}));
     }
     if (!opt.apsKnown) problem.SetParameterBlockConstant(X[0].data());  // gauge
 
@@ -412,6 +415,30 @@ GraphSlamResult solveOnce(
     res.iterations = int(sum.iterations.size());
     res.solverReport = sum.BriefReport();
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
+
+    // ---- AP position covariance from the joint solution (trajectory and APs together).
+    res.apCov.assign(A.size(), {0, 0, 0});
+    if (opt.apCovariance && !opt.apsKnown)
+    {
+        ceres::Covariance::Options co;
+        co.algorithm_type = ceres::SPARSE_QR;
+        co.num_threads = opt.threads;
+        ceres::Covariance cov(co);
+        std::vector<std::pair<const double*, const double*>> blocks;
+        for (size_t j = 0; j < A.size(); ++j)
+            if (apUsed[j]) blocks.emplace_back(A[j].data(), A[j].data());
+        if (!blocks.empty() && cov.Compute(blocks, &problem))
+        {
+            for (size_t j = 0; j < A.size(); ++j)
+            {
+                if (!apUsed[j]) continue;
+                double c[9];
+                cov.GetCovarianceBlock(A[j].data(), A[j].data(), c);
+                res.apCov[j] = {c[0], c[1], c[4]};
+            }
+            res.apCovarianceOk = true;
+        }
+    }
 
     // ---- Results, also as an MRPT graph (poses, then AP vertices; odometry edges).
     for (size_t k = 0; k < N; ++k)

@@ -305,3 +305,55 @@ TEST(LocalizationAppsIot, MapsDevicesAndReportsUnknownNames)
     EXPECT_EQ(bad.rc, 1);
     EXPECT_NE(bad.out.find("'plug'"), std::string::npos) << bad.out;
 }
+
+TEST(LocalizationAppsIot, DevicesFromDriftingOdometryJointly)
+{
+    // Issue 12.2: with the robot's drifting odometry (not a trusted trajectory) devices and
+    // trajectory are estimated jointly; the reported sigma must cover the error.
+    const auto& f = fixture();
+    WorldOptions o;
+    o.duration_s = 60, o.aod = false;
+    o.odoScaleError = 0.02, o.odoYawDrift = 0.03;  // ~1 m of drift over the drive
+    o.seed = 9;
+    const World w = makeWorld(f.w.aps, o);
+    writeBearingCsv(f.dir + "/iot-b.csv", w.bearings);
+    w.odometry.saveTum(f.dir + "/iot-odo.txt");
+    const auto& s = w.truth.poses.front();
+    const std::string common = kBin + "/wifi-iot-map -q --no-plots -b " + f.dir +
+                               "/iot-b.csv --sensor-pose 0.1 0 0 0 0 0 --truth " + f.dir +
+                               "/aps.yaml ";
+    const auto r =
+        run(common + "--odometry-tum " + f.dir + "/iot-odo.txt --initial-pose " +
+            std::to_string(s.x) + " " + std::to_string(s.y) + " " +
+            std::to_string(mrpt::RAD2DEG(s.phi)) + " -o " + f.dir + "/iot-joint");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    EXPECT_NE(r.out.find("estimated jointly from odometry"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("0 true devices not localized"), std::string::npos) << r.out;
+    // Errors and sigmas from the summary lines.
+    std::istringstream is(r.out);
+    std::vector<double> errs;
+    size_t covered = 0;
+    for (std::string line; std::getline(is, line);)
+    {
+        double sx, sy, e;
+        const auto ps = line.find("sigma=("), pe = line.find("error=");
+        if (ps == std::string::npos || pe == std::string::npos) continue;
+        ASSERT_EQ(std::sscanf(line.c_str() + ps, "sigma=(%lf, %lf)", &sx, &sy), 2) << line;
+        ASSERT_EQ(std::sscanf(line.c_str() + pe, "error=%lf", &e), 1) << line;
+        errs.push_back(e);
+        covered += e <= 2 * std::hypot(sx, sy);
+    }
+    ASSERT_EQ(errs.size(), 4u) << r.out;
+    std::sort(errs.begin(), errs.end());
+    EXPECT_LE(0.5 * (errs[1] + errs[2]), 0.5) << r.out;
+    EXPECT_GE(covered, 2u) << r.out;  // the issue: >= 2 of 3 devices within 2 sigma
+    EXPECT_TRUE(mrpt::system::fileExists(f.dir + "/iot-joint/trajectory_tum.txt"));
+    // Trusting the same odometry as the trajectory is what the joint estimate improves on.
+    const auto trusted = run(common + "-t " + f.dir + "/iot-odo.txt -o " + f.dir + "/iot-odo");
+    ASSERT_EQ(trusted.rc, 0) << trusted.out;
+    EXPECT_EQ(
+        run(common + "-t " + f.dir + "/iot-odo.txt --odometry-tum " + f.dir + "/iot-odo.txt -o " +
+            f.dir + "/iot-bad")
+            .rc,
+        1);
+}

@@ -6,6 +6,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ struct GraphSlamOptions
      *  Unknown: APs are estimated, gauge = first pose fixed. */
     bool apsKnown = false;
     int placementHypotheses = 4;
+    /** Unknown APs: compute each AP's position covariance from the joint solution
+     *  (ceres::Covariance; the trajectory's uncertainty is marginalised, gauge = first pose). */
+    bool apCovariance = false;
     bool alignEstimatedAps = true;
     int maxIterations = 100;
     int threads = 2;
@@ -65,6 +69,11 @@ struct GraphSlamResult
     double initialCost = 0, finalCost = 0, solveTime_s = 0, totalTime_s = 0;
     int iterations = 0;
     std::string solverReport;
+    /** With apCovariance: xx, xy, yy [m²] of each AP of `aps` (same order); zeros for APs
+     *  without bearings. apCovarianceOk is false when Ceres could not compute it (rank
+     *  deficient: an AP seen from too few places). */
+    std::vector<std::array<double, 3>> apCov;
+    bool apCovarianceOk = false;
     /** Known APs: which start won, and how many were optimised. */
     std::string placement;
     size_t hypotheses = 1;
