@@ -348,7 +348,7 @@ int main(int argc, char** argv)
                 }
                 sum << "  error (all)    : " << all.asString() << "\n";
                 if (tc >= 0)
-                    sum << "  converged after: " << fmt(tc, 2) << " s from the kidnapping ("
+                    sum << "  converged after: " << fmt(tc, 3) << " s from the kidnapping ("
                         << stepsToConverge << " filter steps; error < " << argThr.getValue()
                         << " m for " << argHold.getValue() << " s; first estimate's error "
                         << fmt(errs.front(), 2) << " m)\n"
