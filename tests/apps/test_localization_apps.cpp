@@ -357,3 +357,70 @@ TEST(LocalizationAppsIot, DevicesFromDriftingOdometryJointly)
             .rc,
         1);
 }
+
+TEST(LocalizationAppsCsv, CsiBearingsLeavesUnmeasuredCellsEmpty)
+{
+    // Issue 12.4: `csi-bearings --csv` must not write 0.000 where nothing was measured, and a
+    // CSV that does carry angles next to a 0 flag makes the apps warn.
+    const std::string sim = kBin + "/wifi-sim", cb = kBin + "/csi-bearings";
+    if (!mrpt::system::fileExists(sim) || !mrpt::system::fileExists(cb))
+        GTEST_SKIP() << "wifi-sim / csi-bearings not built";
+    const auto& f = fixture();
+    const std::string scen = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/scenarios/bearing.yaml";
+    ASSERT_EQ(run(sim + " -q " + scen + " " + f.dir + "/csi.rawlog -d 1 -s 4").rc, 0);
+    const auto r =
+        run(cb + " " + f.dir + "/csi.rawlog " + f.dir + "/csi-b.rawlog --algo fft -q --csv " +
+            f.dir + "/csi-b.csv");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    std::ifstream in(f.dir + "/csi-b.csv");
+    std::string line;
+    ASSERT_TRUE(std::getline(in, line));
+    std::vector<std::string> head;
+    {
+        std::stringstream ss(line);
+        for (std::string c; std::getline(ss, c, ',');) head.push_back(c);
+    }
+    const auto col = [&](const std::string& name)
+    { return size_t(std::find(head.begin(), head.end(), name) - head.begin()); };
+    const size_t hasAod = col("has_aod"), aod = col("aod_deg"), amb = col("aoa_ambiguous"),
+                 mir = col("aoa_mirror_deg");
+    ASSERT_LT(std::max({hasAod, aod, amb, mir}), head.size()) << line;
+    size_t rows = 0, noAod = 0;
+    while (std::getline(in, line))
+    {
+        std::vector<std::string> c;
+        std::stringstream ss(line);
+        for (std::string v; std::getline(ss, v, ',');) c.push_back(v);
+        c.resize(head.size());
+        ++rows;
+        if (c[hasAod] == "0")
+        {
+            ++noAod;
+            EXPECT_TRUE(c[aod].empty()) << line;
+        }
+        if (c[amb] == "0") EXPECT_TRUE(c[mir].empty()) << line;
+    }
+    EXPECT_GT(rows, 10u);
+    InputWarnings w;
+    readBearingCsv(f.dir + "/csi-b.csv", {}, &w);
+    EXPECT_EQ(w.flaggedOffAngles, 0u);
+    std::cout << rows << " rows, " << noAod << " without AoD\n";
+
+    // An old-style CSV (0.000 in the cells of has_aod = 0): every reader warns.
+    std::ofstream(f.dir + "/old.csv")
+        << "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_ambiguous,aoa_mirror_deg,has_aod,"
+           "aod_deg,aod_std_deg,aod_mirror_deg\n"
+        << "1700000001.0,02:00:00:00:0a:01,10,3,0,0.000,0,0.000,0.000,0.000\n";
+    const auto gs =
+        run(kBin + "/wifi-iot-map -q --no-plots -b " + f.dir + "/old.csv -t " + f.dir +
+            "/truth.txt -o " + f.dir + "/old-iot");
+    EXPECT_NE(gs.out.find("has_aoa/has_aod flag is 0"), std::string::npos) << gs.out;
+    const auto pf =
+        run(kBin + "/wifi-pf-localization " + kIni + " -q --no-plots -n 100 -m " + f.dir +
+            "/aps.yaml -b " + f.dir + "/old.csv -o " + f.dir + "/old-pf");
+    EXPECT_NE(pf.out.find("has_aoa/has_aod flag is 0"), std::string::npos) << pf.out;
+    const auto sl =
+        run(kBin + "/wifi-graphslam --no-plots -b " + f.dir + "/old.csv --odometry-tum " + f.dir +
+            "/odometry.txt -o " + f.dir + "/old-gs");
+    EXPECT_NE(sl.out.find("has_aoa/has_aod flag is 0"), std::string::npos) << sl.out;
+}
