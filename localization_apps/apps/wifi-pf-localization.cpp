@@ -26,6 +26,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -42,6 +43,13 @@ public:
     }
     size_t steps = 0;
     void finish() { progress_.done(std::to_string(steps) + " filter steps"); }
+    /** No odometry: each step's action is `motion`'s, its constant-velocity prediction fed
+     *  with the filter's own estimates (out_estimated_path) as they come. */
+    void setUnknownMotion(const UnknownMotion& motion)
+    {
+        motion_ = motion;
+        cv_.emplace(motion);
+    }
 
 protected:
     bool impl_get_next_observations(
@@ -62,12 +70,39 @@ protected:
             const double t = mrpt::Clock::toDouble(stamp);
             progress_.update((t - t0_) / (t1_ - t0_), std::to_string(steps) + " steps");
         }
+        if (cv_ && ok && action && stamp != INVALID_TIMESTAMP) predictAction(action, stamp);
         return ok;
     }
 
 private:
+    // Replaces the rawlog's zero-mean action by the unknown-motion model's, centred on the
+    // constant-velocity prediction from the estimates of the steps before this one.
+    void predictAction(mrpt::obs::CActionCollection::Ptr& action, mrpt::Clock::time_point stamp)
+    {
+        const double t = mrpt::Clock::toDouble(stamp);
+        if (lastStamp_ != INVALID_TIMESTAMP)
+        {
+            if (const auto it = out_estimated_path.find(lastStamp_); it != out_estimated_path.end())
+                cv_->addEstimate(
+                    mrpt::Clock::toDouble(lastStamp_),
+                    mrpt::math::TPose2D(it->second.x, it->second.y, it->second.yaw));
+        }
+        // A new run of the filter (several particle counts or repetitions) starts over.
+        const bool restart = lastStamp_ == INVALID_TIMESTAMP || stamp < lastStamp_;
+        if (restart) cv_->reset();
+        const double dt = restart ? 0.0 : t - mrpt::Clock::toDouble(lastStamp_);
+        auto a = motion_.makeAction(dt, cv_->predictIncrement(t));
+        a->timestamp = stamp;
+        action = mrpt::obs::CActionCollection::Create();
+        action->insert(*a);
+        lastStamp_ = stamp;
+    }
+
     cli::Progress progress_;
     double t0_ = 0, t1_ = 0;
+    UnknownMotion motion_;
+    std::optional<ConstantVelocityPrediction> cv_;
+    mrpt::Clock::time_point lastStamp_ = INVALID_TIMESTAMP;
 };
 
 std::string fmt(double v, int prec = 3)
@@ -270,6 +305,7 @@ int main(int argc, char** argv)
             app.setMinLoggingLevel(mrpt::system::LVL_WARN);
             app.allow_quit_on_esc_key = false;
             app.fill_out_estimated_path = true;
+            if (odo.empty()) app.setUnknownMotion(motion);
             {
                 const std::string iniPath = argIni.getValue();
                 const char* a[] = {"wifi-pf-localization", iniPath.c_str(), rawlog.c_str()};

@@ -117,8 +117,10 @@ double medianError(const std::string& errorsCsv, double from_s)
 
 TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
 {
-    // Issue 12.3: a moving robot (0.5 m/s), 4 APs, no odometry at all: the unknown-motion random
-    // walk must keep the error within 1.5x that of the same run with odometry.
+    // Issue 12.3: a moving robot (0.5 m/s), 4 APs, no odometry at all: the unknown-motion model
+    // (constant velocity from the filter's own estimates + a random walk bounded by --max-speed)
+    // must track it. The issue's target is 1.5x the error with odometry; it is not reached
+    // (kidnapped.yaml, seeds 74-77: 2x; this world with sharp corners and 5 bearings/AP/s: 3-3.6x).
     // Bearing noise as csi-bearings gives on the simulator (~8 deg, 10 % outliers).
     const auto& f = fixture();
     WorldOptions o;
@@ -137,17 +139,18 @@ TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
     ASSERT_EQ(withOdo.rc, 0) << withOdo.out;
     const auto noOdo = run(common + " --max-speed 0.6 -o " + f.dir + "/pf-noodo");
     ASSERT_EQ(noOdo.rc, 0) << noOdo.out;
-    EXPECT_NE(noOdo.out.find("no odometry (random walk, max speed 0.6 m/s"), std::string::npos)
+    EXPECT_NE(
+        noOdo.out.find("no odometry (constant velocity + random walk, max speed 0.6 m/s"),
+        std::string::npos)
         << noOdo.out;
     const double eOdo = medianError(f.dir + "/pf-odo/errors.csv", 15);
     const double eNo = medianError(f.dir + "/pf-noodo/errors.csv", 15);
     std::cout << "median error after 15 s: with odometry " << eOdo << " m, without " << eNo
               << " m\n";
-    // Measured on seeds 5-7: 0.29-0.33 m without odometry vs 0.08-0.10 m with it (3-3.5x:
-    // the issue's 1.5x is not reached by a random walk on this accurate odometry), far below
-    // the 2.9 m of "standing still" odometry.
-    EXPECT_LT(eNo, 0.5) << noOdo.out;
-    EXPECT_LT(eNo, 5 * eOdo) << noOdo.out;
+    // Measured on seeds 5-7: 0.27-0.31 m without odometry vs 0.07-0.09 m with it (3.1-3.6x;
+    // the zero-mean walk gave 0.29-0.33 m), far below the 2.9 m of "standing still" odometry.
+    EXPECT_LT(eNo, 0.45) << noOdo.out;
+    EXPECT_LT(eNo, 4.5 * eOdo) << noOdo.out;
     // Without odometry and without a sane speed the model refuses to run.
     const auto bad = run(common + " --max-speed 0 -o " + f.dir + "/pf-bad");
     EXPECT_EQ(bad.rc, 1);

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 
 #include <fstream>
 
@@ -166,4 +167,41 @@ TEST(LocalizationRawlog, PfRawlogRoundTrip)
     EXPECT_NEAR(c.bearings[5].aoa, w.bearings[5].aoa, 1e-12);
     EXPECT_NEAR(c.bearings[5].sensorPose.x, 0.1, 1e-12);
     EXPECT_EQ(c.otherObservations, 0u);
+}
+
+TEST(LocalizationUnknownMotion, ConstantVelocityPredictsFromRecentEstimates)
+{
+    // Issue 12.3: without odometry each filter step is predicted from the filter's own estimates
+    // (constant velocity, robot frame), bounded by the top speed; no history, no prediction.
+    UnknownMotion m;
+    m.maxSpeed_mps = 0.6, m.velocityWindow_s = 1.0;
+    ConstantVelocityPrediction cv(m);
+    EXPECT_EQ(cv.predictIncrement(0.1), mrpt::poses::CPose2D());
+    // Moving north at 0.4 m/s while the heading turns 10 deg/s, from 90 to 110 deg: the world
+    // velocity in the newest estimate's frame (20 deg to its right).
+    for (int i = 0; i <= 40; ++i)
+    {
+        const double t = 0.05 * i;
+        cv.addEstimate(t, {3.0, 1.0 + 0.4 * t, M_PI / 2 + mrpt::DEG2RAD(10.0) * t});
+    }
+    const auto inc = cv.predictIncrement(2.0 + 0.1);
+    EXPECT_NEAR(inc.x(), 0.04 * std::cos(mrpt::DEG2RAD(20.0)), 1e-6);
+    EXPECT_NEAR(inc.y(), -0.04 * std::sin(mrpt::DEG2RAD(20.0)), 1e-6);
+    EXPECT_NEAR(mrpt::RAD2DEG(inc.phi()), 1.0, 1e-6);
+    // The action is that increment with the random walk's sigma around it.
+    const auto a = m.makeAction(0.1, inc);
+    const auto mean = a->poseChange->getMeanVal();
+    EXPECT_NEAR(mean.x(), inc.x(), 1e-9);
+    EXPECT_NEAR(mean.phi(), inc.phi(), 1e-9);
+    // A jumping estimate (not converged yet) never predicts more than the top speed.
+    cv.addEstimate(2.1, {8.0, 1.0, M_PI / 2});
+    EXPECT_LE(cv.predictIncrement(2.2).norm(), 0.6 * 0.1 + 1e-9);
+    // Time going backwards (a new run of the filter) forgets the history.
+    cv.addEstimate(0.0, {3.0, 1.0, 0.0});
+    EXPECT_EQ(cv.predictIncrement(0.1), mrpt::poses::CPose2D());
+    // Switched off: the zero-mean walk.
+    m.constantVelocity = false;
+    ConstantVelocityPrediction off(m);
+    for (int i = 0; i <= 40; ++i) off.addEstimate(0.05 * i, {0.4 * 0.05 * i, 0, 0});
+    EXPECT_EQ(off.predictIncrement(2.1), mrpt::poses::CPose2D());
 }
