@@ -109,6 +109,7 @@ int main(int argc, char** argv)
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = &in.aps;
                 in.bearings = readBearingCsv(argCsv.getValue(), co, &csvWarn);
+                std::cerr << csvWarn.csvWarning(argCsv.getValue());
             }
             if (argOdo.isSet()) in.odometry = Trajectory2D::fromTumFile(argOdo.getValue());
             mrpt::graphs::CNetworkOfPoses2DInf graph;
@@ -154,8 +155,11 @@ int main(int argc, char** argv)
                 << " AoD edges\n"
                 << "  warnings  : " << res.warnings.summary() << "; " << res.apsWithoutBearings
                 << " APs without bearings\n"
-                << "  solver    : " << res.solverReport << "\n"
-                << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
+                << "  solver    : " << res.solverReport << "\n";
+            if (opt.apsKnown)
+                sum << "  start     : " << res.placement << " (lowest final cost of "
+                    << res.hypotheses << " optimised starts)\n";
+            sum << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
                 << " s\n";
             if (argGt.isSet())
             {

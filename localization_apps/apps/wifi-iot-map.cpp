@@ -5,12 +5,15 @@
  * writes a device map (CSV + YAML) and a PNG. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/core/bits_math.h>
+#include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingGraphSlam.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -39,8 +42,26 @@ int main(int argc, char** argv)
                 "B.csv", cmd);
             TCLAP::ValueArg<std::string> argTraj(
                 "t", "trajectory",
-                "Robot trajectory (TUM) in the map frame; default: the rawlog's odometry", false,
-                "", "TRAJ.txt", cmd);
+                "Robot trajectory (TUM) in the map frame, trusted as exact (e.g. from a "
+                "localization system). Without it, odometry (--odometry-tum or the rawlog's) is "
+                "used jointly: devices and trajectory are estimated together",
+                false, "", "TRAJ.txt", cmd);
+            TCLAP::ValueArg<std::string> argOdo(
+                "", "odometry-tum",
+                "Odometry (TUM), which drifts: devices and trajectory are estimated jointly "
+                "(bearing-only graph SLAM with unknown transmitters, Ceres); device sigmas come "
+                "from the joint solution",
+                false, "", "ODO.txt", cmd);
+            TCLAP::ValueArg<std::string> argInit(
+                "", "initial-pose",
+                "With odometry: the robot's pose at the odometry's first reading in the map frame "
+                "'x y yaw_deg' (default: the odometry frame)",
+                false, "0 0 0", "x y yaw", cmd);
+            TCLAP::ValueArg<double> argOdoSigma(
+                "", "odometry-sigma",
+                "With odometry: its position noise [m per sqrt(m) travelled] (yaw: 1 deg per "
+                "sqrt(m) times this / 0.02)",
+                false, 0.02, "S", cmd);
             TCLAP::ValueArg<std::string> argPose(
                 "", "sensor-pose",
                 "Receive array on the robot for CSV bearings: x y z yaw pitch roll (m, deg)", false,
@@ -68,7 +89,9 @@ int main(int argc, char** argv)
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
 
-            cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
+            cli::JoinedArgv joined(argc, argv, "--sensor-pose", 6);
+            cli::JoinedArgv args(
+                joined.argc(), const_cast<char**>(joined.argv()), "--initial-pose", 3);
             if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
                 return rc;
             const std::string outDir = argOut.getValue();
@@ -89,18 +112,34 @@ int main(int argc, char** argv)
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = argTruth.isSet() ? &truth : nullptr;
                 bearings = readBearingCsv(argCsv.getValue(), co, &warn);
+                std::cerr << warn.csvWarning(argCsv.getValue());
             }
-            else
+            Trajectory2D odo;
+            if (argRawlog.isSet())
             {
                 auto c = readRawlog(argRawlog.getValue());
                 bearings = std::move(c.bearings);
-                traj = std::move(c.odometry);
+                odo = std::move(c.odometry);
             }
+            if (argTraj.isSet() && argOdo.isSet())
+                throw std::invalid_argument("give --trajectory or --odometry-tum, not both");
+            if (argOdo.isSet()) odo = Trajectory2D::fromTumFile(argOdo.getValue());
             if (argTraj.isSet()) traj = Trajectory2D::fromTumFile(argTraj.getValue());
-            if (traj.empty())
+            const bool joint = traj.empty() && !odo.empty();
+            if (traj.empty() && odo.empty())
                 throw std::runtime_error(
-                    "no trajectory: give --trajectory (TUM) or a rawlog "
-                    "with odometry");
+                    "no trajectory: give --trajectory, --odometry-tum or a rawlog with odometry");
+            if (joint)
+            {
+                // Odometry re-anchored at --initial-pose: T ⊕ (odo₀⁻¹ ⊕ odo_k).
+                std::istringstream is(argInit.getValue());
+                double x0, y0, yaw0;
+                if (!(is >> x0 >> y0 >> yaw0))
+                    throw std::invalid_argument("--initial-pose: expected 'x y yaw_deg'");
+                const mrpt::poses::CPose2D T(x0, y0, mrpt::DEG2RAD(yaw0));
+                const mrpt::poses::CPose2D o0(odo.poses.front());
+                for (auto& p : odo.poses) p = (T + (mrpt::poses::CPose2D(p) - o0)).asTPose();
+            }
             if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
 
             std::set<MacAddress> only;
@@ -109,6 +148,36 @@ int main(int argc, char** argv)
                 std::stringstream ss(argOnly.getValue());
                 std::string m;
                 while (std::getline(ss, m, ',')) only.insert(MacAddress::fromString(m));
+            }
+            if (!only.empty())
+            {
+                std::vector<BearingRecord> kept;
+                for (const auto& b : bearings)
+                    if (only.count(b.transmitter)) kept.push_back(b);
+                bearings = std::move(kept);
+            }
+            GraphSlamResult jointRes;
+            if (joint)
+            {
+                // Bearing-only SLAM with unknown transmitters: the devices are the graph's APs.
+                GraphSlamInput in;
+                in.odometry = odo;
+                in.bearings = bearings;
+                GraphSlamOptions go;
+                go.useAod = false;
+                go.apCovariance = true;
+                go.minStd_rad = mrpt::DEG2RAD(argMinStd.getValue());
+                go.loss = argLoss.getValue();
+                go.odoSigmaXY_perSqrtM = argOdoSigma.getValue();
+                go.odoSigmaYaw_perSqrtM = 0.0175 * argOdoSigma.getValue() / 0.02;
+                if (!argQuiet.getValue())
+                    std::cerr << "wifi-iot-map: " << bearings.size() << " bearings on "
+                              << odo.size()
+                              << " odometry poses: devices and trajectory jointly...\n";
+                jointRes = solveBearingGraph(in, go);
+                traj = jointRes.poses;
+                jointRes.poses.saveTum(
+                    outDir + "/trajectory_tum.txt", "wifi-iot-map: trajectory (joint solution)");
             }
             auto rays = raysFromBearings(bearings, traj, &warn);
             if (rays.empty())
@@ -138,6 +207,28 @@ int main(int argc, char** argv)
                 if (!only.empty() && !only.count(mac)) continue;
                 auto d = triangulateDevice(r, o);
                 d.mac = mac;
+                if (joint)
+                {
+                    // The joint solution's device and its covariance (the rays above, on the
+                    // solved trajectory, only give the residual statistics).
+                    const auto& aps = jointRes.aps.transmitters();
+                    const auto it = std::find_if(
+                        aps.begin(), aps.end(), [&](const auto& t) { return t.mac == mac; });
+                    if (it == aps.end())
+                    {
+                        d.localized = false;
+                        d.note = "not in the joint solution (no usable AoA)";
+                    }
+                    else
+                    {
+                        const auto& c = jointRes.apCov[size_t(it - aps.begin())];
+                        d.x = it->pose.x, d.y = it->pose.y;
+                        d.cov[0] = c[0], d.cov[1] = c[1], d.cov[2] = c[2];
+                        d.covInflation = 1;
+                        d.localized = jointRes.apCovarianceOk && d.rays >= o.minRays;
+                        if (!jointRes.apCovarianceOk) d.note = "joint covariance rank deficient";
+                    }
+                }
                 if (const auto* t = truth.find(mac)) d.name = t->name;
                 devs.push_back(d);
             }
@@ -147,7 +238,10 @@ int main(int argc, char** argv)
 
             std::ostringstream sum;
             sum << "wifi-iot-map summary\n  input   : " << bearings.size() << " bearings, "
-                << traj.size() << " trajectory poses\n  warnings: " << warn.summary() << "\n";
+                << traj.size()
+                << (joint ? " poses estimated jointly from odometry (" + jointRes.solverReport + ")"
+                          : " trajectory poses (trusted)")
+                << "\n  warnings: " << warn.summary() << "\n";
             std::vector<double> errs;
             char buf[512];
             for (const auto& d : devs)

@@ -2,8 +2,9 @@
  *
  * wifi-pf-localization: MRPT's pf-localization (mrpt::apps::MonteCarloLocalization_Rawlog, same
  * .ini) linked with the WiFi bearing map, plus what a user wants around it: bearings from a CSV
- * and odometry from a TUM file instead of a rawlog, input checks with counted warnings, the
- * estimated trajectory as TUM, errors against ground truth, time to converge, plots. */
+ * and odometry from a TUM file instead of a rawlog, localization without odometry (UnknownMotion),
+ * input checks with counted warnings, the estimated trajectory as TUM, errors against ground
+ * truth, time to converge from the kidnapping, plots. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/apps/MonteCarloLocalization_App.h>
 #include <mrpt/config/CConfigFile.h>
@@ -18,11 +19,14 @@
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -39,6 +43,13 @@ public:
     }
     size_t steps = 0;
     void finish() { progress_.done(std::to_string(steps) + " filter steps"); }
+    /** No odometry: each step's action is `motion`'s, its constant-velocity prediction fed
+     *  with the filter's own estimates (out_estimated_path) as they come. */
+    void setUnknownMotion(const UnknownMotion& motion)
+    {
+        motion_ = motion;
+        cv_.emplace(motion);
+    }
 
 protected:
     bool impl_get_next_observations(
@@ -48,19 +59,50 @@ protected:
         const bool ok =
             DataSourceRawlog::impl_get_next_observations(action, observations, observation);
         // Odometry readings only become the next step's action: not a filter step.
-        if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry) &&
-            observation->timestamp != INVALID_TIMESTAMP && t1_ > t0_)
+        mrpt::Clock::time_point stamp = INVALID_TIMESTAMP;
+        if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry))
+            stamp = observation->timestamp;
+        else if (ok && observations && !observations->empty())
+            stamp = (*observations->begin())->timestamp;
+        if (stamp != INVALID_TIMESTAMP && t1_ > t0_)
         {
             ++steps;
-            const double t = mrpt::Clock::toDouble(observation->timestamp);
+            const double t = mrpt::Clock::toDouble(stamp);
             progress_.update((t - t0_) / (t1_ - t0_), std::to_string(steps) + " steps");
         }
+        if (cv_ && ok && action && stamp != INVALID_TIMESTAMP) predictAction(action, stamp);
         return ok;
     }
 
 private:
+    // Replaces the rawlog's zero-mean action by the unknown-motion model's, centred on the
+    // constant-velocity prediction from the estimates of the steps before this one.
+    void predictAction(mrpt::obs::CActionCollection::Ptr& action, mrpt::Clock::time_point stamp)
+    {
+        const double t = mrpt::Clock::toDouble(stamp);
+        if (lastStamp_ != INVALID_TIMESTAMP)
+        {
+            if (const auto it = out_estimated_path.find(lastStamp_); it != out_estimated_path.end())
+                cv_->addEstimate(
+                    mrpt::Clock::toDouble(lastStamp_),
+                    mrpt::math::TPose2D(it->second.x, it->second.y, it->second.yaw));
+        }
+        // A new run of the filter (several particle counts or repetitions) starts over.
+        const bool restart = lastStamp_ == INVALID_TIMESTAMP || stamp < lastStamp_;
+        if (restart) cv_->reset();
+        const double dt = restart ? 0.0 : t - mrpt::Clock::toDouble(lastStamp_);
+        auto a = motion_.makeAction(dt, cv_->predictIncrement(t));
+        a->timestamp = stamp;
+        action = mrpt::obs::CActionCollection::Create();
+        action->insert(*a);
+        lastStamp_ = stamp;
+    }
+
     cli::Progress progress_;
     double t0_ = 0, t1_ = 0;
+    UnknownMotion motion_;
+    std::optional<ConstantVelocityPrediction> cv_;
+    mrpt::Clock::time_point lastStamp_ = INVALID_TIMESTAMP;
 };
 
 std::string fmt(double v, int prec = 3)
@@ -80,8 +122,10 @@ int main(int argc, char** argv)
             TCLAP::CmdLine cmd(
                 "Global (kidnapped-robot) localization with MRPT's particle filter and the WiFi "
                 "bearing map. Takes the same .ini as pf-localization (see "
-                "share/localization/pf-localization-wifi.ini) and a rawlog of bearing + odometry "
-                "observations, or a bearings CSV + odometry TUM file.",
+                "share/localization/pf-localization-wifi.ini) and a rawlog of bearing (+ "
+                "odometry) observations, or a bearings CSV (+ odometry TUM file). Without "
+                "odometry the robot's motion is an unknown-motion random walk bounded by "
+                "--max-speed (the .ini's [UnknownMotion] section).",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIni(
                 "config", "pf-localization .ini", true, "", "CONFIG.ini", cmd);
@@ -89,11 +133,19 @@ int main(int argc, char** argv)
                 "rawlog", "Rawlog with CObservationWiFiBearing + CObservationOdometry", false, "",
                 "IN.rawlog", cmd);
             TCLAP::ValueArg<std::string> argCsv(
-                "b", "bearings-csv", "Bearings CSV (instead of a rawlog; needs --odometry-tum)",
-                false, "", "B.csv", cmd);
+                "b", "bearings-csv", "Bearings CSV (instead of a rawlog)", false, "", "B.csv", cmd);
             TCLAP::ValueArg<std::string> argOdo(
-                "", "odometry-tum", "Odometry as a TUM file (with --bearings-csv)", false, "",
-                "ODO.txt", cmd);
+                "", "odometry-tum",
+                "Odometry as a TUM file (with --bearings-csv). Optional: without it the motion "
+                "is unknown (see --max-speed)",
+                false, "", "ODO.txt", cmd);
+            TCLAP::ValueArg<double> argMaxSpeed(
+                "", "max-speed",
+                "Without odometry: the robot's top speed [m/s]. Between filter steps dt apart "
+                "the pose takes a zero-mean Gaussian step of sigma = max_speed*sqrt(dt*tau) per "
+                "axis (tau = 1 s), so over any second the walk spreads as far as the robot can "
+                "drive. Overrides [UnknownMotion] max_speed_mps of the .ini (default 0.5)",
+                false, 0.5, "M/S", cmd);
             TCLAP::ValueArg<std::string> argPose(
                 "", "sensor-pose",
                 "Receive array on the robot for CSV bearings: x y z yaw pitch roll (m, deg)", false,
@@ -116,7 +168,8 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argSkip(
                 "", "skip",
                 "Drop the first S seconds of bearings: the filter starts (uniformly, lost) there, "
-                "as if the robot had been kidnapped to wherever it is at that time",
+                "as if the robot had been kidnapped to wherever it is at that time. Times to "
+                "converge and errors.csv count from this kidnapping moment",
                 false, 0.0, "S", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
@@ -167,19 +220,20 @@ int main(int argc, char** argv)
             {
                 if (!rawlog.empty())
                     throw std::invalid_argument("give a rawlog or --bearings-csv, not both");
-                if (!argOdo.isSet())
-                    throw std::invalid_argument("--bearings-csv needs --odometry-tum");
                 BearingCsvOptions co;
                 const auto sp = cli::poseFromText(argPose.getValue(), "--sensor-pose");
                 co.sensorPose = mrpt::math::TPose2D(sp.x(), sp.y(), sp.yaw());
                 co.names = &txs;
                 bearings = readBearingCsv(argCsv.getValue(), co, &warn);
-                odo = Trajectory2D::fromTumFile(argOdo.getValue());
+                std::cerr << warn.csvWarning(argCsv.getValue());
+                if (argOdo.isSet()) odo = Trajectory2D::fromTumFile(argOdo.getValue());
             }
             else
             {
-                if (rawlog.empty())
-                    throw std::invalid_argument("give a rawlog or --bearings-csv + --odometry-tum");
+                if (rawlog.empty()) throw std::invalid_argument("give a rawlog or --bearings-csv");
+                if (argOdo.isSet())
+                    throw std::invalid_argument(
+                        "--odometry-tum goes with --bearings-csv (a rawlog carries its odometry)");
                 auto c = readRawlog(rawlog);
                 bearings = std::move(c.bearings);
                 odo = std::move(c.odometry);
@@ -191,11 +245,24 @@ int main(int argc, char** argv)
                                  "information)\n";
             }
             if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
+            // Without odometry: the unknown-motion random walk, from the .ini's [UnknownMotion]
+            // section, --max-speed overriding.
+            UnknownMotion motion;
             if (odo.empty())
-                std::cerr << "warning: no odometry: the filter will use the .ini's "
-                             "[DummyOdometryParams] motion noise only\n";
+            {
+                motion.loadFromConfigFile(ini, "UnknownMotion");
+                if (argMaxSpeed.isSet()) motion.maxSpeed_mps = argMaxSpeed.getValue();
+                motion.validate();
+                std::cerr << "note: no odometry: the motion model is the unknown-motion "
+                          << motion.asString() << "\n";
+            }
             std::vector<BearingRecord> usable;
-            const double tSkip = bearings.front().t + argSkip.getValue();
+            // The kidnapping moment: the filter starts lost (uniform particles) here.
+            const double tSkip = std::min_element(
+                                     bearings.begin(), bearings.end(),
+                                     [](const auto& a, const auto& b) { return a.t < b.t; })
+                                     ->t +
+                                 argSkip.getValue();
             for (const auto& b : bearings)
             {
                 if (b.t < tSkip) continue;
@@ -215,7 +282,13 @@ int main(int argc, char** argv)
                 throw std::runtime_error(
                     "no usable bearings: " + warn.summary() +
                     " (check the map's MACs and that odometry and bearings overlap in time)");
-            if (argCsv.isSet() || warn.total() || otherObs || argSkip.getValue() > 0)
+            if (odo.empty())
+            {
+                // Action/sensory-frame rawlog: each step's action is the random walk over dt.
+                rawlog = outDir + "/input.rawlog";
+                writePfRawlogUnknownMotion(rawlog, usable, motion);
+            }
+            else if (argCsv.isSet() || warn.total() || otherObs || argSkip.getValue() > 0)
             {
                 // The filter reads a rawlog: write the checked input as one.
                 rawlog = outDir + "/input.rawlog";
@@ -232,6 +305,7 @@ int main(int argc, char** argv)
             app.setMinLoggingLevel(mrpt::system::LVL_WARN);
             app.allow_quit_on_esc_key = false;
             app.fill_out_estimated_path = true;
+            if (odo.empty()) app.setUnknownMotion(motion);
             {
                 const std::string iniPath = argIni.getValue();
                 const char* a[] = {"wifi-pf-localization", iniPath.c_str(), rawlog.c_str()};
@@ -256,7 +330,10 @@ int main(int argc, char** argv)
             std::ostringstream sum;
             sum << "wifi-pf-localization summary\n"
                 << "  input          : " << usable.size() << " bearings of " << txs.size()
-                << " known transmitters, " << odo.size() << " odometry readings\n"
+                << " known transmitters, "
+                << (odo.empty() ? "no odometry (" + motion.asString() + ")"
+                                : std::to_string(odo.size()) + " odometry readings")
+                << "\n"
                 << "  warnings       : " << warn.summary() << "\n"
                 << "  particles      : " << counts << "\n"
                 << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
@@ -270,21 +347,28 @@ int main(int argc, char** argv)
                 {
                     mrpt::math::TPose2D g;
                     if (!gt.interpolate(est.t[i], g, 0.5)) continue;
-                    times.push_back(est.t[i] - t0);
+                    times.push_back(est.t[i] - tSkip);
                     errs.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
                 }
                 if (errs.empty())
                     throw std::runtime_error("the ground truth doesn't overlap the estimate");
-                // Converged: first time after which the error stays below the threshold for
-                // `hold` seconds.
+                // Time to converge, from the kidnapping moment t_k (the start of the input after
+                // --skip, when the filter is started lost with particles spread uniformly):
+                // t_c - t_k, where t_c is the time of the first estimate from which the error
+                // stays below the threshold for `hold` seconds (the whole window must lie inside
+                // the run). Each estimate is the PF mean after that step's bearings, so a filter
+                // that converges on its first step reports ~0 s: the summary adds the number of
+                // filter steps and the first estimate's error to tell those apart.
                 double tc = -1;
+                size_t stepsToConverge = 0;
                 for (size_t i = 0; i < errs.size() && tc < 0; ++i)
                 {
                     size_t j = i;
                     while (j < errs.size() && errs[j] < argThr.getValue() &&
                            times[j] - times[i] < argHold.getValue())
                         ++j;
-                    if (j < errs.size() && errs[j] < argThr.getValue()) tc = times[i];
+                    if (j < errs.size() && errs[j] < argThr.getValue())
+                        tc = times[i], stepsToConverge = i + 1;
                 }
                 std::vector<double> after;
                 for (size_t i = 0; i < errs.size(); ++i)
@@ -292,14 +376,18 @@ int main(int argc, char** argv)
                 const auto all = computeStats(errs), conv = computeStats(after);
                 {
                     std::ofstream f(outDir + "/errors.csv");
+                    f << "# t_s: seconds since the kidnapping moment (filter start, UNIX "
+                      << fmt(tSkip, 3) << ")\n";
                     f << "t_s,position_error_m\n";
                     for (size_t i = 0; i < errs.size(); ++i)
                         f << times[i] << "," << errs[i] << "\n";
                 }
                 sum << "  error (all)    : " << all.asString() << "\n";
                 if (tc >= 0)
-                    sum << "  converged after: " << fmt(tc, 2) << " s (error < "
-                        << argThr.getValue() << " m for " << argHold.getValue() << " s)\n"
+                    sum << "  converged after: " << fmt(tc, 3) << " s from the kidnapping ("
+                        << stepsToConverge << " filter steps; error < " << argThr.getValue()
+                        << " m for " << argHold.getValue() << " s; first estimate's error "
+                        << fmt(errs.front(), 2) << " m)\n"
                         << "  after converged: " << conv.asString() << "\n"
                         << "  target         : median after convergence <= 0.5 m (WiROS 1.2 m): "
                         << (conv.median <= 0.5 ? "MET" : "NOT MET") << "\n";

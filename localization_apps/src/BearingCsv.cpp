@@ -39,7 +39,17 @@ std::string InputWarnings::summary() const
     std::ostringstream o;
     o << unknownTransmitter << " bearings of unknown transmitters, " << outsideTrajectory
       << " outside the trajectory's time span, " << noAngle << " rows without an angle";
+    if (flaggedOffAngles) o << ", " << flaggedOffAngles << " angle cells flagged not measured";
     return o.str();
+}
+
+std::string InputWarnings::csvWarning(const std::string& path) const
+{
+    if (!flaggedOffAngles) return {};
+    return "warning: " + path + ": " + std::to_string(flaggedOffAngles) +
+           " rows carry an angle in aoa_deg/aod_deg while their has_aoa/has_aod flag is 0; those "
+           "angles were not measured and are ignored (older csi-bearings --csv wrote 0.000 "
+           "there)\n";
 }
 
 std::vector<BearingRecord> readBearingCsv(
@@ -111,6 +121,11 @@ std::vector<BearingRecord> readBearingCsv(
             return !(c == "0" || c == "false");
         };
         double v = 0;
+        // A 0 flag next to a filled angle cell: older csi-bearings wrote 0.000 there. Not used,
+        // but counted so the apps can warn (the cell might be a real angle the flag disowns).
+        for (const auto& [flagCol, angleCol] :
+             {std::pair{"has_aoa", "aoa_deg"}, {"has_aod", "aod_deg"}})
+            if (!flag(flagCol) && !cell(angleCol).empty() && warnings) warnings->flaggedOffAngles++;
         if (flag("has_aoa") && num("aoa_deg", v))
         {
             r.hasAoa = true;

@@ -7,11 +7,13 @@
 #include <mrpt_wifi/localization/DeviceMapper.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include "BearingResiduals.h"
@@ -46,6 +48,13 @@ struct UnionFind
 TPose2D placeTrajectory(
     const Trajectory2D& odo, const std::vector<BearingRecord>& bearings, const TransmitterMap& aps,
     double window_s)
+{
+    return placeTrajectoryCandidates(odo, bearings, aps, window_s, 1).front();
+}
+
+std::vector<TPose2D> placeTrajectoryCandidates(
+    const Trajectory2D& odo, const std::vector<BearingRecord>& bearings, const TransmitterMap& aps,
+    double window_s, size_t maxCandidates)
 {
     if (odo.empty()) throw std::runtime_error("placeTrajectory: empty odometry");
     std::vector<std::pair<const BearingRecord*, TPose2D>> sample;
@@ -84,31 +93,61 @@ TPose2D placeTrajectory(
         const double c = std::cos(th), s = std::sin(th);
         return TPose2D(x - (c * p0.x - s * p0.y), y - (s * p0.x + c * p0.y), th);
     };
-    double best = -1e300;
-    TPose2D bestT;
-    double bx = 0, by = 0, byaw = 0;
+    struct Cell
+    {
+        double score, x, y, yaw;
+    };
+    std::vector<Cell> grid;
     for (double x = xmin; x <= xmax + 1e-9; x += 0.5)
         for (double y = ymin; y <= ymax + 1e-9; y += 0.5)
             for (int k = 0; k < 72; ++k)
             {
                 const double yaw = -M_PI + k * (M_PI / 36);
-                const TPose2D T = transformFor(x, y, yaw);
-                const double s = score(T);
-                if (s > best) best = s, bestT = T, bx = x, by = y, byaw = yaw;
+                grid.push_back({score(transformFor(x, y, yaw)), x, y, yaw});
             }
-    const double cx = bx, cy = by, cyaw = byaw;
-    for (double x = cx - 0.5; x <= cx + 0.5 + 1e-9; x += 0.1)
-        for (double y = cy - 0.5; y <= cy + 0.5 + 1e-9; y += 0.1)
-            for (int k = -5; k <= 5; ++k)
-            {
-                const TPose2D T = transformFor(x, y, cyaw + k * M_PI / 180);
-                const double s = score(T);
-                if (s > best) best = s, bestT = T;
-            }
-    return bestT;
+    std::sort(
+        grid.begin(), grid.end(), [](const Cell& a, const Cell& b) { return a.score > b.score; });
+    // Distinct modes, best first: a cell joins only if no better one is within 1.5 m and 45°.
+    std::vector<Cell> modes;
+    for (const auto& c : grid)
+    {
+        if (modes.size() >= std::max<size_t>(1, maxCandidates)) break;
+        bool near = false;
+        for (const auto& m : modes)
+            near |= std::hypot(c.x - m.x, c.y - m.y) < 1.5 &&
+                    std::abs(wrapToPi(c.yaw - m.yaw)) < M_PI / 4;
+        if (!near) modes.push_back(c);
+    }
+    std::vector<std::pair<double, TPose2D>> refined;
+    for (const auto& m : modes)
+    {
+        double best = -1e300;
+        TPose2D bestT;
+        for (double x = m.x - 0.5; x <= m.x + 0.5 + 1e-9; x += 0.1)
+            for (double y = m.y - 0.5; y <= m.y + 0.5 + 1e-9; y += 0.1)
+                for (int k = -5; k <= 5; ++k)
+                {
+                    const TPose2D T = transformFor(x, y, m.yaw + k * M_PI / 180);
+                    const double s = score(T);
+                    if (s > best) best = s, bestT = T;
+                }
+        refined.emplace_back(best, bestT);
+    }
+    std::stable_sort(
+        refined.begin(), refined.end(),
+        [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<TPose2D> out;
+    for (const auto& r : refined) out.push_back(r.second);
+    return out;
 }
 
-GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt)
+namespace
+{
+/** One solve. Known APs: the nodes start at `initialWorld` (interpolated at the node times) if
+ *  given, else at the odometry composed with `place`. */
+GraphSlamResult solveOnce(
+    const GraphSlamInput& in, const GraphSlamOptions& opt, const TPose2D& place,
+    const Trajectory2D* initialWorld)
 {
     mrpt::system::CTicTac total;
     GraphSlamResult res;
@@ -189,13 +228,14 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
 
     // ---- Initial values.
     std::vector<std::array<double, 3>> X(N);
-    TPose2D place(0, 0, 0);
-    if (opt.apsKnown) place = placeTrajectory(nodes, in.bearings, in.aps);
     for (size_t k = 0; k < N; ++k)
     {
-        const auto p = compose(place, nodes.poses[k]);
+        const TPose2D placedOdo = compose(place, nodes.poses[k]);
+        TPose2D p = placedOdo;
+        if (initialWorld && !initialWorld->interpolate(nodes.t[k], p))
+            throw std::logic_error("graph SLAM: initial poses don't cover the nodes");
         X[k] = {p.x, p.y, p.phi};
-        res.initialPoses.push_back(nodes.t[k], p);
+        res.initialPoses.push_back(nodes.t[k], placedOdo);
     }
     if (!opt.apsKnown)
     {
@@ -321,7 +361,7 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
                 " has no odometry path to node 0)");
 
     auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
-    std::vector<bool> apUsed(A.size(), false);
+    std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     for (const auto& a : att)
     {
         const auto it = apIndex.find(a.b->transmitter);
@@ -347,7 +387,7 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
                         a.b->aodAmbiguous}),
                 detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
             res.aodEdges++;
-            apUsed[it->second] = true;
+            apUsed[it->second] = apAod[it->second] = true;
         }
     }
     if (res.aoaEdges + res.aodEdges == 0)
@@ -355,7 +395,10 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
     for (size_t j = 0; j < A.size(); ++j)
     {
         if (!apUsed[j]) res.apsWithoutBearings++;
-        if (opt.apsKnown || !apUsed[j]) problem.SetParameterBlockConstant(A[j].data());
+        if (opt.apsKnown || !apUsed[j])
+            problem.SetParameterBlockConstant(A[j].data());
+        else if (!apAod[j])  // AoA only: the AP's yaw is unobservable, keep it out
+            problem.SetManifold(A[j].data(), new ceres::SubsetManifold(3, {2}));
     }
     if (!opt.apsKnown) problem.SetParameterBlockConstant(X[0].data());  // gauge
 
@@ -372,6 +415,30 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
     res.iterations = int(sum.iterations.size());
     res.solverReport = sum.BriefReport();
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
+
+    // ---- AP position covariance from the joint solution (trajectory and APs together).
+    res.apCov.assign(A.size(), {0, 0, 0});
+    if (opt.apCovariance && !opt.apsKnown)
+    {
+        ceres::Covariance::Options co;
+        co.algorithm_type = ceres::SPARSE_QR;
+        co.num_threads = opt.threads;
+        ceres::Covariance cov(co);
+        std::vector<std::pair<const double*, const double*>> blocks;
+        for (size_t j = 0; j < A.size(); ++j)
+            if (apUsed[j]) blocks.emplace_back(A[j].data(), A[j].data());
+        if (!blocks.empty() && cov.Compute(blocks, &problem))
+        {
+            for (size_t j = 0; j < A.size(); ++j)
+            {
+                if (!apUsed[j]) continue;
+                double c[9];
+                cov.GetCovarianceBlock(A[j].data(), A[j].data(), c);
+                res.apCov[j] = {c[0], c[1], c[4]};
+            }
+            res.apCovarianceOk = true;
+        }
+    }
 
     // ---- Results, also as an MRPT graph (poses, then AP vertices; odometry edges).
     for (size_t k = 0; k < N; ++k)
@@ -411,6 +478,96 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
     res.graph.root = 0;
     res.totalTime_s = total.Tac();
     return res;
+}
+
+/** 2D rigid transform T minimising Σ|T·a_i − b_i|² (Umeyama, no scale). */
+TPose2D alignPoints(const Eigen::Matrix2Xd& a, const Eigen::Matrix2Xd& b)
+{
+    const Eigen::Matrix3d T = Eigen::umeyama(a, b, false);
+    return TPose2D(T(0, 2), T(1, 2), std::atan2(T(1, 0), T(0, 0)));
+}
+}  // namespace
+
+GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt)
+{
+    if (!opt.apsKnown) return solveOnce(in, opt, TPose2D(0, 0, 0), nullptr);
+    if (in.aps.empty()) throw std::runtime_error("graph SLAM: known APs requested, none given");
+    if (in.odometry.size() < 2) throw std::runtime_error("graph SLAM: the odometry has < 2 poses");
+
+    // Several starts, each optimised; the lowest final cost (the same problem for all) wins:
+    // (1) the best distinct placements of the odometry among the APs over the first seconds;
+    // (2) the estimated-AP solution (which needs no placement) moved onto the map by the rigid
+    //     transform that best aligns its APs with the known ones.
+    mrpt::system::CTicTac total;
+    Trajectory2D placed = in.odometry;  // what is placed: odometry, or the .graph's node poses
+    if (in.graph && in.graph->nodes.size() == in.odometry.size())
+    {
+        placed = Trajectory2D();
+        size_t k = 0;
+        for (const auto& [id, p] : in.graph->nodes)
+            placed.push_back(in.odometry.t[k++], p.asTPose());
+    }
+    GraphSlamResult best;
+    bool have = false;
+    size_t tried = 0;
+    auto consider = [&](GraphSlamResult&& r, const std::string& how)
+    {
+        ++tried;
+        if (!have || r.finalCost < best.finalCost)
+        {
+            best = std::move(r), have = true;
+            best.placement = how;
+        }
+    };
+    const auto places = placeTrajectoryCandidates(
+        placed, in.bearings, in.aps, 30, size_t(std::max(1, opt.placementHypotheses)));
+    for (size_t i = 0; i < places.size(); ++i)
+        consider(
+            solveOnce(in, opt, places[i], nullptr),
+            "placement " + std::to_string(i + 1) + " of the first 30 s");
+    if (opt.alignEstimatedAps)
+    {
+        GraphSlamOptions eo = opt;
+        eo.apsKnown = false;
+        GraphSlamInput ei = in;  // names and arrays only are used
+        std::optional<GraphSlamResult> est;
+        try
+        {
+            est = solveOnce(ei, eo, TPose2D(0, 0, 0), nullptr);
+        }
+        catch (const std::runtime_error&)
+        {
+            // Not enough for the estimated-AP solution: the placements above stand.
+        }
+        if (est)
+        {
+            std::vector<std::pair<TPose2D, TPose2D>> pairs;
+            for (const auto& t : est->aps.transmitters())
+                if (const auto* k = in.aps.find(t.mac)) pairs.emplace_back(t.pose, k->pose);
+            if (pairs.size() >= 2)
+            {
+                Eigen::Matrix2Xd a(2, pairs.size()), b(2, pairs.size());
+                for (size_t i = 0; i < pairs.size(); ++i)
+                {
+                    a.col(long(i)) << pairs[i].first.x, pairs[i].first.y;
+                    b.col(long(i)) << pairs[i].second.x, pairs[i].second.y;
+                }
+                const TPose2D T = alignPoints(a, b);
+                Trajectory2D init;
+                for (size_t k = 0; k < est->poses.size(); ++k)
+                    init.push_back(est->poses.t[k], compose(T, est->poses.poses[k]));
+                // The estimated-AP solve fixes node 0 at the odometry's first pose: T also
+                // places the odometry.
+                const TPose2D place = T;
+                consider(
+                    solveOnce(in, opt, place, &init), "estimated-AP solution aligned to the map (" +
+                                                          std::to_string(pairs.size()) + " APs)");
+            }
+        }
+    }
+    best.hypotheses = tried;
+    best.totalTime_s = total.Tac();
+    return best;
 }
 
 }  // namespace mrpt_wifi::localization

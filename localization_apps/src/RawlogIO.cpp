@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
@@ -108,6 +109,37 @@ size_t writePfRawlog(
         ++n;
     }
     return n;
+}
+
+size_t writePfRawlogUnknownMotion(
+    const std::string& path, const std::vector<BearingRecord>& bearings,
+    const UnknownMotion& motion)
+{
+    motion.validate();
+    mrpt::io::CFileGZOutputStream f;
+    if (!f.open(path, 0)) throw std::runtime_error(path + ": cannot write rawlog");
+    auto arch = mrpt::serialization::archiveFrom(f);
+    std::vector<size_t> order(bearings.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(
+        order.begin(), order.end(),
+        [&](size_t a, size_t b) { return bearings[a].t < bearings[b].t; });
+    size_t frames = 0;
+    for (size_t i = 0; i < order.size();)
+    {
+        const double t = bearings[order[i]].t;
+        const double dt = frames ? t - bearings[order[i - 1]].t : 0.0;
+        mrpt::obs::CActionCollection acts;
+        auto a = motion.makeAction(dt);
+        a->timestamp = mrpt::Clock::fromDouble(t);
+        acts.insert(*a);
+        mrpt::obs::CSensoryFrame sf;
+        for (; i < order.size() && bearings[order[i]].t == t; ++i)
+            sf.insert(observationFromRecord(bearings[order[i]]));
+        arch << acts << sf;
+        ++frames;
+    }
+    return frames;
 }
 
 }  // namespace mrpt_wifi::localization

@@ -307,19 +307,24 @@ int main(int argc, char** argv)
                 extra.push_back(b);
                 if (!argNoBR.getValue()) extra.push_back(b->asBearingRange());
                 if (csv.is_open())
+                {
+                    // What was not measured is an empty cell, never a 0 that reads as an angle.
+                    const auto deg = [&](bool measured, double rad)
+                    {
+                        std::ostringstream c;
+                        if (measured) c << std::fixed << std::setprecision(3) << rad * toDeg;
+                        return c.str();
+                    };
                     csv << std::setprecision(6) << mrpt::Clock::toDouble(b->timestamp) << ","
                         << b->transmitter.asString() << "," << b->chanspec.asString() << ","
                         << int(b->rssi_dBm) << "," << b->algorithm << "," << std::setprecision(3)
                         << b->aoa_rad * toDeg << "," << b->aoaStd_rad * toDeg << ","
-                        << int(b->aoaAmbiguous) << "," << b->aoaMirror_rad * toDeg << ","
-                        << int(b->hasAod) << ",";
-                if (csv.is_open() && b->hasAod)
-                    csv << b->aod_rad * toDeg << "," << b->aodStd_rad * toDeg << ","
-                        << b->aodMirror_rad * toDeg << ",";
-                else if (csv.is_open())
-                    csv << ",,,";  // no AoD: empty cells
-                if (csv.is_open())
-                    csv << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
+                        << int(b->aoaAmbiguous) << "," << deg(b->aoaAmbiguous, b->aoaMirror_rad)
+                        << "," << int(b->hasAod) << "," << deg(b->hasAod, b->aod_rad) << ","
+                        << deg(b->hasAod, b->aodStd_rad) << ","
+                        << deg(b->hasAod && b->aodAmbiguous, b->aodMirror_rad) << ","
+                        << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
+                }
                 const bool picture =
                     (argImages.isSet() || argRawlogImages.getValue()) &&
                     (st.bearings - 1) % std::max(1u, argImageEvery.getValue()) == 0;

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 
 #include <fstream>
 
@@ -51,17 +52,31 @@ TEST(LocalizationCsv, ReadsColumnsInAnyOrderWithEmptyCells)
 
 TEST(LocalizationCsv, ReadsCsiBearingsCsvWithFlagColumns)
 {
-    // The layout `csi-bearings --csv` writes: zeros in the cells of what wasn't measured.
+    // The layout `csi-bearings --csv` writes: empty cells for what wasn't measured (row 3);
+    // older versions wrote zeros there (row 1): the 0 flag wins, and the reader counts the
+    // disowned cells so the apps can warn about them.
     const auto path = writeTemp(
         "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,aoa_ambiguous,"
         "aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,delay_ns,quality,frames\n"
         "1700000000.06,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,1,151.8,0,0.000,0.000,0.000,"
         "0,0.88,1\n"
-        "1700000000.07,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,151.8,1,10,3,170,0,0.88,1\n");
-    const auto r = readBearingCsv(path, {});
-    ASSERT_EQ(r.size(), 2u);
+        "1700000000.07,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,151.8,1,10,3,170,0,0.88,1\n"
+        "1700000000.08,02:00:00:00:03:02,6/20,-37,aoa_only,28.2,7.4,0,,0,,,,0,0.88,1\n");
+    InputWarnings w;
+    const auto r = readBearingCsv(path, {}, &w);
+    ASSERT_EQ(r.size(), 3u);
     EXPECT_TRUE(r[0].hasAoa && r[0].aoaAmbiguous && !r[0].hasAod);
     EXPECT_TRUE(!r[1].aoaAmbiguous && r[1].hasAod && r[1].aodAmbiguous);
+    EXPECT_TRUE(r[2].hasAoa && !r[2].aoaAmbiguous && !r[2].hasAod);
+    EXPECT_EQ(w.flaggedOffAngles, 1u);
+    EXPECT_NE(w.csvWarning("b.csv").find("b.csv: 1 rows"), std::string::npos);
+    EXPECT_NE(w.summary().find("1 angle cells flagged"), std::string::npos);
+    InputWarnings clean;
+    readBearingCsv(
+        writeTemp("timestamp,transmitter,has_aod,aoa_deg,aod_deg\n"
+                  "1700000000.0,02:00:00:00:03:02,0,10,\n"),
+        {}, &clean);
+    EXPECT_TRUE(clean.csvWarning("b.csv").empty());
 }
 
 TEST(LocalizationCsv, ErrorsNameTheLine)
@@ -153,4 +168,41 @@ TEST(LocalizationRawlog, PfRawlogRoundTrip)
     EXPECT_NEAR(c.bearings[5].aoa, w.bearings[5].aoa, 1e-12);
     EXPECT_NEAR(c.bearings[5].sensorPose.x, 0.1, 1e-12);
     EXPECT_EQ(c.otherObservations, 0u);
+}
+
+TEST(LocalizationUnknownMotion, ConstantVelocityPredictsFromRecentEstimates)
+{
+    // Issue 12.3: without odometry each filter step is predicted from the filter's own estimates
+    // (constant velocity, robot frame), bounded by the top speed; no history, no prediction.
+    UnknownMotion m;
+    m.maxSpeed_mps = 0.6, m.velocityWindow_s = 1.0;
+    ConstantVelocityPrediction cv(m);
+    EXPECT_EQ(cv.predictIncrement(0.1), mrpt::poses::CPose2D());
+    // Moving north at 0.4 m/s while the heading turns 10 deg/s, from 90 to 110 deg: the world
+    // velocity in the newest estimate's frame (20 deg to its right).
+    for (int i = 0; i <= 40; ++i)
+    {
+        const double t = 0.05 * i;
+        cv.addEstimate(t, {3.0, 1.0 + 0.4 * t, M_PI / 2 + mrpt::DEG2RAD(10.0) * t});
+    }
+    const auto inc = cv.predictIncrement(2.0 + 0.1);
+    EXPECT_NEAR(inc.x(), 0.04 * std::cos(mrpt::DEG2RAD(20.0)), 1e-6);
+    EXPECT_NEAR(inc.y(), -0.04 * std::sin(mrpt::DEG2RAD(20.0)), 1e-6);
+    EXPECT_NEAR(mrpt::RAD2DEG(inc.phi()), 1.0, 1e-6);
+    // The action is that increment with the random walk's sigma around it.
+    const auto a = m.makeAction(0.1, inc);
+    const auto mean = a->poseChange->getMeanVal();
+    EXPECT_NEAR(mean.x(), inc.x(), 1e-9);
+    EXPECT_NEAR(mean.phi(), inc.phi(), 1e-9);
+    // A jumping estimate (not converged yet) never predicts more than the top speed.
+    cv.addEstimate(2.1, {8.0, 1.0, M_PI / 2});
+    EXPECT_LE(cv.predictIncrement(2.2).norm(), 0.6 * 0.1 + 1e-9);
+    // Time going backwards (a new run of the filter) forgets the history.
+    cv.addEstimate(0.0, {3.0, 1.0, 0.0});
+    EXPECT_EQ(cv.predictIncrement(0.1), mrpt::poses::CPose2D());
+    // Switched off: the zero-mean walk.
+    m.constantVelocity = false;
+    ConstantVelocityPrediction off(m);
+    for (int i = 0; i <= 40; ++i) off.addEstimate(0.05 * i, {0.4 * 0.05 * i, 0, 0});
+    EXPECT_EQ(off.predictIncrement(2.1), mrpt::poses::CPose2D());
 }

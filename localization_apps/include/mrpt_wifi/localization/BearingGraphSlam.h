@@ -6,6 +6,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,19 @@ struct GraphSlamOptions
     std::string loss = "cauchy";  //!< robust loss of bearing edges: cauchy | huber | none
     double lossScale = 1.0;       //!< in units of σ
 
-    /** Known APs: stay fixed and define the world frame (the trajectory's initial placement is
-     *  found by a global search). Unknown: APs are estimated, gauge = first pose fixed. */
+    /** Known APs: stay fixed and define the world frame. The trajectory's initial placement
+     *  is multi-hypothesis: the `placementHypotheses` best distinct placements of a global
+     *  search over the first 30 s, and (alignEstimatedAps) the estimated-AP solution moved onto
+     *  the map by the rigid transform aligning its APs with the known ones; each is optimised
+     *  and the lowest final cost wins (symmetric AP layouts and the mirror ambiguity of linear
+     *  arrays make several placements look alike at the start).
+     *  Unknown: APs are estimated, gauge = first pose fixed. */
     bool apsKnown = false;
+    int placementHypotheses = 4;
+    /** Unknown APs: compute each AP's position covariance from the joint solution
+     *  (ceres::Covariance; the trajectory's uncertainty is marginalised, gauge = first pose). */
+    bool apCovariance = false;
+    bool alignEstimatedAps = true;
     int maxIterations = 100;
     int threads = 2;
     bool verbose = false;
@@ -58,6 +69,14 @@ struct GraphSlamResult
     double initialCost = 0, finalCost = 0, solveTime_s = 0, totalTime_s = 0;
     int iterations = 0;
     std::string solverReport;
+    /** With apCovariance: xx, xy, yy [m²] of each AP of `aps` (same order); zeros for APs
+     *  without bearings. apCovarianceOk is false when Ceres could not compute it (rank
+     *  deficient: an AP seen from too few places). */
+    std::vector<std::array<double, 3>> apCov;
+    bool apCovarianceOk = false;
+    /** Known APs: which start won, and how many were optimised. */
+    std::string placement;
+    size_t hypotheses = 1;
 };
 
 /** Builds and solves the graph (Ceres). Throws std::runtime_error on an empty odometry, no usable
@@ -67,6 +86,12 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
 /** Global placement of an odometry trajectory in the frame of known APs: the rigid transform
  *  maximising the robust bearing likelihood of the bearings in the first `window_s` seconds
  *  (grid over position and yaw, then a finer grid). */
+/** The `maxCandidates` best distinct placements (≥ 1.5 m or 45° apart on the coarse grid),
+ *  each refined, best first. */
+std::vector<mrpt::math::TPose2D> placeTrajectoryCandidates(
+    const Trajectory2D& odometry, const std::vector<BearingRecord>& bearings,
+    const TransmitterMap& aps, double window_s, size_t maxCandidates);
+
 mrpt::math::TPose2D placeTrajectory(
     const Trajectory2D& odometry, const std::vector<BearingRecord>& bearings,
     const TransmitterMap& aps, double window_s = 30);

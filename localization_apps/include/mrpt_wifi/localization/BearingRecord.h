@@ -54,7 +54,12 @@ struct InputWarnings
     size_t unknownTransmitter = 0;  //!< bearings of transmitters not in the map
     size_t outsideTrajectory = 0;   //!< timestamps outside the pose time span
     size_t noAngle = 0;             //!< rows with neither AoA nor AoD
+    /** CSV angle cells that are filled while their `has_aoa` / `has_aod` flag is 0: ignored
+     *  (the flag wins), counted because they hint at a writer that fills unmeasured cells. */
+    size_t flaggedOffAngles = 0;
     std::string summary() const;
+    /** The warning line a CLI prints after reading `path` ("" when there is nothing to say). */
+    std::string csvWarning(const std::string& path) const;
     size_t total() const { return unknownTransmitter + outsideTrajectory + noAngle; }
 };
 

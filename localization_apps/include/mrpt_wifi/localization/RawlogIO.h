@@ -3,6 +3,7 @@
 
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <string>
@@ -31,5 +32,12 @@ CObservationWiFiBearing::Ptr observationFromRecord(
 size_t writePfRawlog(
     const std::string& path, const std::vector<BearingRecord>& bearings,
     const Trajectory2D& odometry);
+
+/** Writes an action/sensory-frame rawlog for pf-localization without odometry: one sensory frame
+ *  per bearing time (bearings with the same timestamp share it), each after the action `motion`
+ *  gives for the time since the previous frame. Returns the number of sensory frames. */
+size_t writePfRawlogUnknownMotion(
+    const std::string& path, const std::vector<BearingRecord>& bearings,
+    const UnknownMotion& motion);
 
 }  // namespace mrpt_wifi::localization

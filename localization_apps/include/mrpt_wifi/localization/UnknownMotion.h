@@ -1,0 +1,90 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/math/TPose2D.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/poses/CPose2D.h>
+
+#include <deque>
+#include <string>
+#include <utility>
+
+namespace mrpt_wifi::localization
+{
+/** Motion model for a robot whose motion is unknown (no odometry): a random walk whose spread is
+ *  bounded by the robot's top speed, around a constant-velocity prediction.
+ *
+ *  Between two filter steps `dt` apart the pose changes by a Gaussian in the robot frame, with
+ *  mean the predicted increment (ConstantVelocityPrediction: the filter's own estimate over the
+ *  last `velocityWindow_s`, bounded by the top speed; zero when `constantVelocity` is off or no
+ *  estimate exists yet) and
+ *  \f[ \sigma_{xy} = v_{max}\sqrt{dt\,\tau}, \qquad \sigma_\phi = \omega_{max}\sqrt{dt\,\tau} \f]
+ *  (per axis). Over any horizon `τ` (correlationTime_s) the accumulated walk therefore has a
+ *  spread of `v_max·τ`: the distance the robot can cover in that time at top speed, however many
+ *  steps the bearings cut it into (a per-step σ of `v_max·dt` would shrink the spread with the
+ *  bearing rate and let the filter fall behind a moving robot). Steps longer than `maxStep_s`
+ *  are capped there (the filter restarts its search rather than spreading over the whole map
+ *  after a gap), and σ never falls below the floors (a particle cloud needs some jitter).
+ *
+ *  Used by wifi-pf-localization (no --odometry-tum) and by any program that feeds MRPT's particle
+ *  filters without odometry: makeAction() gives the CActionRobotMovement2D to pass as the
+ *  filter's action. */
+struct UnknownMotion
+{
+    double maxSpeed_mps = 0.5;       //!< v_max: the robot's top speed [m/s]
+    double maxTurnRate_dps = 90;     //!< ω_max [deg/s]
+    double correlationTime_s = 0.2;  //!< τ: horizon over which the walk spreads v_max·τ
+    double maxStep_s = 2.0;          //!< dt is capped at this [s]
+    double minStdXY_m = 0.01;        //!< σ_xy floor [m]
+    double minStdPhi_deg = 0.5;      //!< σ_φ floor [deg]
+    /** Predict each step from the filter's recent estimates (constant velocity) instead of a
+     *  zero-mean walk: a pure random walk lags behind a moving robot. */
+    bool constantVelocity = true;
+    double velocityWindow_s = 1.0;  //!< estimates this far back give the velocity [s]
+
+    /** σ of the position change per axis [m] and of the heading change [rad] over `dt_s`. */
+    double stdXY(double dt_s) const;
+    double stdPhi(double dt_s) const;
+
+    /** The filter action for a step of `dt_s` seconds: mean `increment` (robot frame; zero for
+     *  the pure random walk), the σ above (mmGaussian). */
+    mrpt::obs::CActionRobotMovement2D::Ptr makeAction(
+        double dt_s, const mrpt::poses::CPose2D& increment = {}) const;
+
+    /** Reads `max_speed_mps`, `max_turn_rate_dps`, `correlation_time_s`, `max_step_s`,
+     *  `min_std_xy`, `min_std_phi_deg`, `constant_velocity` (bool), `velocity_window_s`
+     *  from `section` (missing keys keep their value).
+     *  Throws std::invalid_argument on non-positive speeds or times. */
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
+    /** Throws std::invalid_argument naming the bad field. */
+    void validate() const;
+    std::string asString() const;
+};
+
+/** The constant-velocity prediction of UnknownMotion: fed with the filter's estimate after each
+ *  step, it predicts the next step's pose increment in the robot frame.
+ *
+ *  The velocity (linear and angular) is the displacement of the estimate between the newest
+ *  estimate and the one `velocityWindow_s` before it, divided by their time difference; the
+ *  increment over `dt` is that motion applied from the newest estimate, expressed in its frame,
+ *  its length bounded by `maxSpeed_mps·dt` and its turn by `maxTurnRate_dps·dt`. Until the
+ *  history spans half the window (a fresh start, a gap longer than `maxStep_s`, or time going
+ *  backwards: a new run) the prediction is zero, i.e. the random walk. */
+class ConstantVelocityPrediction
+{
+public:
+    explicit ConstantVelocityPrediction(const UnknownMotion& motion) : m_(motion) {}
+
+    /** The filter's estimate (PF mean) at time `t_s` [s], after that step's observations. */
+    void addEstimate(double t_s, const mrpt::math::TPose2D& estimate);
+    /** The predicted increment from the newest estimate to time `t_s` (robot frame). */
+    mrpt::poses::CPose2D predictIncrement(double t_s) const;
+    void reset() { hist_.clear(); }
+
+private:
+    UnknownMotion m_;
+    std::deque<std::pair<double, mrpt::math::TPose2D>> hist_;
+};
+
+}  // namespace mrpt_wifi::localization
