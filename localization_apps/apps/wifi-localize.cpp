@@ -5,7 +5,9 @@
  * CObservationOdometry), turns CSI into bearings (the sensor's own `<label>_AOA` bearings when it
  * makes them, else its own BearingProcessor), and feeds them to MRPT's particle filter with the
  * WiFi bearing map as they arrive: pose estimate as TUM (flushed per line), a status line per
- * second, an optional rawlog of everything seen, and an optional live 3-D view. */
+ * second, an optional rawlog of everything seen, and an optional live 3-D view. With
+ * `map_devices = true` it also maps the transmitters it hears (wifi-iot-map's triangulation on
+ * the AoA bearings along the odometry), updated while the robot drives. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -14,6 +16,7 @@
 #include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/vector_loadsave.h>
+#include <mrpt/opengl/CBox.h>
 #include <mrpt/opengl/CFBORender.h>
 #include <mrpt/opengl/CGridPlaneXY.h>
 #include <mrpt/opengl/CPointCloud.h>
@@ -27,6 +30,7 @@
 #include <mrpt/system/os.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/PhaseCalibration.h>
@@ -228,6 +232,8 @@ public:
         scene->insert(rays_);
         estimate_ = mrpt::opengl::stock_objects::CornerXYZSimple(0.8f, 5.0f);
         scene->insert(estimate_);
+        devices_ = mrpt::opengl::CSetOfObjects::Create();
+        scene->insert(devices_);
         // The latest bearing-delay profile, as a picture beside the room (x: angle -90..90 deg,
         // y: delay), with a frame around it.
         const double px0 = roomMax.x + 0.5, pw = 0.8 * (roomMax.y - roomMin.y);
@@ -269,11 +275,13 @@ public:
         std::optional<mrpt::img::CImage> profile;  // x: angle, y: delay or power
         std::string profileLabel;
         std::string status;
+        std::vector<DeviceEstimate> devices;  // live device map (localized ones drawn)
     };
 
     static Snapshot snapshot(
         const LiveLocalizer& loc, const std::deque<CObservationWiFiBearing::Ptr>& recent,
-        const bearing::BearingProfile* profile, const std::string& status)
+        const bearing::BearingProfile* profile, const std::string& status,
+        const std::vector<DeviceEstimate>* devices = nullptr)
     {
         Snapshot s;
         const auto& pdf = loc.particles();
@@ -334,6 +342,7 @@ public:
             }
         }
         s.status = status;
+        if (devices) s.devices = *devices;
         return s;
     }
 
@@ -376,6 +385,46 @@ public:
         estimate_->setPose(mrpt::poses::CPose3D(s.mean.x, s.mean.y, 0.05, s.mean.phi, 0, 0));
         rays_->clear();
         for (const auto& r : s.rays) rays_->appendLine(r[0], r[1], 0.1, r[2], r[3], 0.1);
+        devices_->clear();
+        for (const auto& d : s.devices)
+        {
+            if (!d.localized) continue;
+            // The estimate (red square) and its 95% ellipse (k = sqrt(chi2_2(0.95)) = 2.4477).
+            auto e = mrpt::opengl::CSetOfLines::Create();
+            e->setColor(0.85, 0.1, 0.1);
+            e->setLineWidth(2);
+            const double a = 0.5 * (d.cov[0] + d.cov[2]),
+                         b = std::sqrt(
+                             0.25 * (d.cov[0] - d.cov[2]) * (d.cov[0] - d.cov[2]) +
+                             d.cov[1] * d.cov[1]);
+            const double l1 = std::sqrt(std::max(0.0, a + b)), l2 = std::sqrt(std::max(0.0, a - b));
+            const double th = 0.5 * std::atan2(2 * d.cov[1], d.cov[0] - d.cov[2]);
+            const auto pt = [&](int i)
+            {
+                const double u = 2 * M_PI * i / 36, px = 2.4477 * l1 * std::cos(u),
+                             py = 2.4477 * l2 * std::sin(u);
+                return std::array<double, 2>{
+                    d.x + std::cos(th) * px - std::sin(th) * py,
+                    d.y + std::sin(th) * px + std::cos(th) * py};
+            };
+            auto p0 = pt(0);
+            e->appendLine(p0[0], p0[1], 0.15, p0[0], p0[1], 0.15);
+            for (int i = 1; i <= 36; ++i)
+            {
+                const auto q = pt(i);
+                e->appendLineStrip(q[0], q[1], 0.15);
+            }
+            devices_->insert(e);
+            auto box = mrpt::opengl::CBox::Create(
+                mrpt::math::TPoint3D(d.x - 0.1, d.y - 0.1, 0.1),
+                mrpt::math::TPoint3D(d.x + 0.1, d.y + 0.1, 0.3));
+            box->setColor(0.85, 0.1, 0.1);
+            devices_->insert(box);
+            auto t = mrpt::opengl::CText::Create(d.name.empty() ? d.mac.asString() : d.name);
+            t->setLocation(d.x + 0.2, d.y + 0.2, 0.3);
+            t->setColor(0.6, 0, 0);
+            devices_->insert(t);
+        }
         if (s.profile)
         {
             profile_->assignImage(*s.profile);
@@ -417,15 +466,15 @@ public:
 private:
     static constexpr float kElevation_deg = 80;
     static constexpr const char* kLegend =
-        "blue: particles, axes: estimate, orange: bearings of the last second, right: the "
-        "latest profile";
+        "blue: particles, axes: estimate, orange: bearings of the last second, red: mapped "
+        "devices (95%), right: the latest profile";
     mrpt::gui::CDisplayWindow3D win_;
     mrpt::math::TPoint2Df camTarget_;
     float camZoom_ = 10;
     double roomMax_ = 0;  // right end of the drawing (room + profile)
     mrpt::opengl::CPointCloud::Ptr particles_;
     mrpt::opengl::CSetOfLines::Ptr rays_;
-    mrpt::opengl::CSetOfObjects::Ptr estimate_;
+    mrpt::opengl::CSetOfObjects::Ptr estimate_, devices_;
     mrpt::opengl::CTexturedPlane::Ptr profile_;
     mrpt::opengl::CText::Ptr profileLabel_;
     std::thread thread_;
@@ -439,6 +488,27 @@ std::string fmt(double v, int prec = 2)
     char b[64];
     std::snprintf(b, sizeof(b), "%.*f", prec, v);
     return b;
+}
+
+/** The live device map in one line: `devices: name (x, y) +-sigma [m], ...`. */
+std::string devicesLine(const std::vector<DeviceEstimate>& devs)
+{
+    std::string s = "devices:";
+    for (const auto& d : devs)
+    {
+        s += " " + (d.name.empty() ? d.mac.asString() : d.name);
+        if (d.localized)
+            s += " (" + fmt(d.x) + ", " + fmt(d.y) + ") +-" +
+                 fmt(std::sqrt(std::max(0.0, std::max(d.cov[0], d.cov[2])))) + "m";
+        else
+            s += " (not yet: " + std::to_string(d.rays) + " bearings)";
+        s += ",";
+    }
+    if (devs.empty())
+        s += " none yet";
+    else
+        s.pop_back();
+    return s;
 }
 }  // namespace
 
@@ -482,6 +552,11 @@ int main(int argc, char** argv)
                 false, 1.0, "M", cmd);
             TCLAP::ValueArg<double> argHold(
                 "", "converged-hold", "... and must stay for this long [s]", false, 5.0, "S", cmd);
+            TCLAP::ValueArg<std::string> argDevTruth(
+                "", "devices-truth",
+                "With map_devices: true device positions (transmitters YAML): errors in the "
+                "summary",
+                false, "", "TX.yaml", cmd);
             TCLAP::SwitchArg argView("", "view", "Live 3-D window", cmd);
             TCLAP::ValueArg<std::string> argShot(
                 "", "screenshot", "With --view: save the window to this PNG at the end", false, "",
@@ -505,6 +580,21 @@ int main(int argc, char** argv)
             const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
             LiveLocalizer loc(ini, iniDir);
             auto fallback = makeFallbackProcessor(ini, iniDir, false);
+            LiveDeviceMapper mapper(ini, "wifi-localize");
+            TransmitterMap devTruth;
+            if (argDevTruth.isSet())
+                devTruth = TransmitterMap::fromYamlFile(argDevTruth.getValue());
+            const auto nameDevices = [&]
+            {
+                auto devs = mapper.devices();
+                for (auto& d : devs)
+                    if (const auto* t = devTruth.find(d.mac))
+                        d.name = t->name;
+                    else if (const auto* k = loc.wifiMap().transmitters().find(d.mac))
+                        d.name = k->name;
+                return devs;
+            };
+            std::vector<DeviceEstimate> liveDevices;  // the latest live map, named
             auto lastProfileWanted = Clock::now();
             std::optional<bearing::BearingProfile> latestProfile;  // for the view
 
@@ -566,7 +656,7 @@ int main(int argc, char** argv)
             uint64_t secBearings = 0, secPoses = 0, poseOutputs = 0;
             double newestObs = 0, lastObsWall = 0, firstObsWall = 0, firstObsTime = 0;
             const auto t0 = Clock::now();
-            auto lastStatus = t0, lastView = t0;
+            auto lastStatus = t0, lastView = t0, lastMapUpdate = t0;
             const auto elapsed = [&]
             { return std::chrono::duration<double>(Clock::now() - t0).count(); };
             // Filter steps with the bearings queued (one per max_bearings_per_step), then one
@@ -644,6 +734,7 @@ int main(int argc, char** argv)
                     {
                         ++nOdo;
                         loc.addOdometry(*odo);
+                        if (mapper.enabled()) mapper.addOdometry(*odo);
                     }
                     else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
                     {
@@ -653,6 +744,7 @@ int main(int argc, char** argv)
                             sensorBearingLabels.insert(l.substr(0, l.size() - 4));
                         ++nBearings, ++secBearings;
                         loc.addBearing(b);
+                        if (mapper.enabled()) mapper.addBearing(*b);
                         recent.push_back(b);
                     }
                     else if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obs))
@@ -674,6 +766,12 @@ int main(int argc, char** argv)
                                 }
                                 ++nFallback, ++nBearings, ++secBearings;
                                 loc.addBearing(fb);
+                                if (mapper.enabled())
+                                {
+                                    mapper.addBearing(*fb);
+                                    // The rawlog then holds what wifi-iot-map needs.
+                                    if (rawlog) rawlog->push(fb);
+                                }
                                 recent.push_back(fb);
                             }
                     }
@@ -704,6 +802,21 @@ int main(int argc, char** argv)
                         (lags.empty() ? std::string("-") : fmt(lags.back() * 1e3, 0) + "ms") +
                         (loc.hasOdometry() ? "" : " (no odometry)");
                 }
+                if (mapper.enabled() &&
+                    std::chrono::duration<double>(now - lastMapUpdate).count() >=
+                        mapper.updatePeriod_s())
+                {
+                    mapper.update();
+                    liveDevices = nameDevices();
+                    lastMapUpdate = Clock::now();
+                    if (!argQuiet.getValue())
+                        std::cerr << "[wifi-localize] t=" << fmt(elapsed(), 1) << "s "
+                                  << devicesLine(liveDevices) << "\n";
+                }
+                if (!statusText.empty() && mapper.enabled())
+                    statusText += " devices=" + std::to_string(std::count_if(
+                                                    liveDevices.begin(), liveDevices.end(),
+                                                    [](const auto& d) { return d.localized; }));
                 if (!statusText.empty()) lastStatusText = statusText;
                 if (sinceStatus >= 1.0)
                 {
@@ -714,18 +827,25 @@ int main(int argc, char** argv)
                 if (view && now - lastView > std::chrono::milliseconds(200))
                 {
                     view->post(LiveView::snapshot(
-                        loc, recent, latestProfile ? &*latestProfile : nullptr, statusText));
+                        loc, recent, latestProfile ? &*latestProfile : nullptr, statusText,
+                        &liveDevices));
                     lastView = now;
                 }
             }
             stopSensors = true;
             for (auto& s : sensors)
                 if (s->thread.joinable()) s->thread.join();
+            if (mapper.enabled())  // the final map: everything seen
+            {
+                mapper.update();
+                liveDevices = nameDevices();
+            }
             if (view && !argShot.getValue().empty())
             {
                 view->stopThread();
                 view->draw(LiveView::snapshot(
-                    loc, recent, latestProfile ? &*latestProfile : nullptr, lastStatusText));
+                    loc, recent, latestProfile ? &*latestProfile : nullptr, lastStatusText,
+                    &liveDevices));
                 view->screenshot(argShot.getValue(), lastStatusText);
             }
 
@@ -786,6 +906,33 @@ int main(int argc, char** argv)
                         << "  after converged: " << computeStats(after).asString() << "\n";
                 else
                     sum << "  converged after: never\n";
+            }
+            if (mapper.enabled())
+            {
+                saveDeviceCsv(outDir + "/devices.csv", liveDevices);
+                saveDeviceYaml(outDir + "/devices.yaml", liveDevices);
+                sum << "  device map     : " << mapper.bearings() << " AoA bearings, "
+                    << liveDevices.size() << " devices (" << mapper.warnings().summary()
+                    << "), written to " << outDir << "/devices.csv\n";
+                std::vector<double> errs;
+                for (const auto& d : liveDevices)
+                {
+                    const double sx = std::sqrt(std::max(0.0, d.cov[0])),
+                                 sy = std::sqrt(std::max(0.0, d.cov[2]));
+                    sum << "    " << d.mac.asString() << " " << d.name << " "
+                        << (d.localized ? "OK " : "-- ") << "x=" << fmt(d.x) << " y=" << fmt(d.y)
+                        << " sigma=(" << fmt(sx) << ", " << fmt(sy) << ") m bearings=" << d.rays
+                        << " inliers=" << d.inliers;
+                    if (const auto* t = devTruth.find(d.mac); t && d.localized)
+                    {
+                        errs.push_back(std::hypot(d.x - t->pose.x, d.y - t->pose.y));
+                        sum << " error=" << fmt(errs.back()) << " m";
+                    }
+                    if (!d.note.empty()) sum << " (" << d.note << ")";
+                    sum << "\n";
+                }
+                if (argDevTruth.isSet())
+                    sum << "  device error   : " << computeStats(errs).asString() << "\n";
             }
             std::cout << sum.str();
             std::ofstream(outDir + "/summary.txt") << sum.str();

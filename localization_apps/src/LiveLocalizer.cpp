@@ -4,6 +4,7 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
+#include <mrpt_wifi/localization/RawlogIO.h>
 
 #include <algorithm>
 #include <cmath>
@@ -154,6 +155,62 @@ double LiveLocalizer::spread_m() const
 {
     const auto [cov, m] = pdf_.getCovarianceAndMean();
     return std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+}
+
+LiveDeviceMapper::LiveDeviceMapper(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+    enabled_ = c.read_bool(s, "map_devices", false);
+    // wifi-iot-map's command-line defaults
+    opts_.model.minStd_rad = mrpt::DEG2RAD(c.read_double(s, "map_min_std_deg", 3.0));
+    opts_.model.outlierProb = c.read_double(s, "map_outlier_prob", 0.1);
+    opts_.loss = c.read_string(s, "map_loss", "cauchy");
+    opts_.gridStep_m = c.read_double(s, "map_grid_m", 0.1);
+    updatePeriod_s_ = c.read_double(s, "map_update_period_s", updatePeriod_s_);
+    if (!(opts_.model.minStd_rad > 0) || !(opts_.model.outlierProb >= 0) ||
+        !(opts_.model.outlierProb < 1) || !(opts_.gridStep_m > 0) || !(updatePeriod_s_ > 0))
+        throw std::invalid_argument(
+            "[" + s +
+            "] map_min_std_deg, map_grid_m and map_update_period_s must be > 0, "
+            "map_outlier_prob in [0, 1)");
+    if (opts_.loss != "cauchy" && opts_.loss != "huber" && opts_.loss != "none")
+        throw std::invalid_argument(
+            "[" + s + "] map_loss = " + opts_.loss + ": expected cauchy, huber or none");
+}
+
+void LiveDeviceMapper::addOdometry(const mrpt::obs::CObservationOdometry& odo)
+{
+    odometry_.emplace_back(mrpt::Clock::toDouble(odo.timestamp), odo.odometry.asTPose());
+}
+
+void LiveDeviceMapper::addBearing(const CObservationWiFiBearing& b)
+{
+    auto r = recordFromObservation(b);
+    if (r.hasAoa) bearings_.push_back(std::move(r));
+}
+
+void LiveDeviceMapper::update()
+{
+    // The inputs as readRawlog() makes them from a rawlog of the same observations.
+    auto odo = odometry_;
+    std::stable_sort(
+        odo.begin(), odo.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    Trajectory2D traj;
+    for (const auto& [t, p] : odo)
+        if (traj.empty() || t > traj.t.back()) traj.push_back(t, p);
+    auto bearings = bearings_;
+    std::stable_sort(
+        bearings.begin(), bearings.end(),
+        [](const BearingRecord& a, const BearingRecord& b) { return a.t < b.t; });
+
+    warnings_ = InputWarnings();
+    devices_.clear();
+    if (traj.empty()) return;
+    for (const auto& [mac, rays] : raysFromBearings(bearings, traj, &warnings_))
+    {
+        auto d = triangulateDevice(rays, opts_);
+        d.mac = mac;
+        devices_.push_back(d);
+    }
 }
 
 }  // namespace mrpt_wifi::localization

@@ -183,3 +183,54 @@ TEST(UnknownMotion, RandomWalkSpreadIsIndependentOfTheStepRate)
     const auto b = localization::unknownMotionAction(0.05, 1.0, mrpt::DEG2RAD(90.0));
     EXPECT_NEAR(10 * b.poseChange->getCovariance()(0, 0), cov(0, 0), 0.02 * cov(0, 0));
 }
+
+TEST(LiveDeviceMapper, OffUnlessAskedAndBadOptionsNameTheKey)
+{
+    mrpt::config::CConfigFileMemory none("[wifi-localize]\n");
+    EXPECT_FALSE(localization::LiveDeviceMapper(none, "wifi-localize").enabled());
+    mrpt::config::CConfigFileMemory bad("[wifi-localize]\nmap_devices = true\nmap_loss = cauchi\n");
+    try
+    {
+        localization::LiveDeviceMapper m(bad, "wifi-localize");
+        FAIL() << "accepted map_loss = cauchi";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("map_loss"), std::string::npos) << e.what();
+    }
+}
+
+TEST(LiveDeviceMapper, FindsADeviceFromBearingsAlongTheOdometryInAnyArrivalOrder)
+{
+    mrpt::config::CConfigFileMemory ini("[wifi-localize]\nmap_devices = true\n");
+    localization::LiveDeviceMapper m(ini, "wifi-localize");
+    ASSERT_TRUE(m.enabled());
+    const double devX = 3.0, devY = 2.0;
+    const auto mac = MacAddress::fromString("02:00:00:00:03:09");
+    // The robot drives along y = 0 from x = 0 to 6 m (yaw 0); the odometry arrives after all
+    // bearings and newest first (sensor threads deliver in their own order).
+    std::vector<mrpt::obs::CObservationOdometry> odo;
+    for (int i = 0; i <= 60; ++i)
+    {
+        const double t = 1000.0 + 0.1 * i, x = 0.1 * i;
+        auto b = CObservationWiFiBearing::Create();
+        b->timestamp = mrpt::Clock::fromDouble(t);
+        b->transmitter = mac;
+        b->aoa_rad = std::atan2(devY, devX - x);
+        b->aoaStd_rad = mrpt::DEG2RAD(3.0);
+        m.addBearing(*b);
+        mrpt::obs::CObservationOdometry o;
+        o.timestamp = mrpt::Clock::fromDouble(t);
+        o.odometry = mrpt::poses::CPose2D(x, 0, 0);
+        odo.push_back(o);
+    }
+    for (auto it = odo.rbegin(); it != odo.rend(); ++it) m.addOdometry(*it);
+    m.update();
+    ASSERT_EQ(m.devices().size(), 1u);
+    const auto& d = m.devices()[0];
+    EXPECT_EQ(d.mac, mac);
+    EXPECT_TRUE(d.localized) << d.note;
+    EXPECT_NEAR(d.x, devX, 0.05);
+    EXPECT_NEAR(d.y, devY, 0.05);
+    EXPECT_EQ(m.bearings(), 61u);
+}

@@ -316,3 +316,76 @@ TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
               << " m; median error live " << median(eLive.afterWarmup) << " m, offline "
               << median(eOff.afterWarmup) << " m\n";
 }
+
+TEST(WifiLocalize, MapsDevicesLiveAndEndsWithTheOfflineMap)
+{
+    // iot.yaml with the odometry in the map frame (start_at_origin: false), so the device map
+    // is in the frame of the true positions; the trajectory of both runs is this odometry.
+    test::TempDir tmp;
+    const auto scenario = tmp.file("iot.yaml");
+    {
+        std::istringstream in(test::readFile(kShare + "/scenarios/iot.yaml"));
+        std::ofstream o(scenario);
+        for (std::string line; std::getline(in, line);)
+        {
+            if (const auto p = line.find("../arrays/"); p != std::string::npos)
+                line.replace(p, 2, kShare);
+            o << line << "\n";
+            if (line.rfind("odometry:", 0) == 0) o << "  start_at_origin: false\n";
+        }
+    }
+    const auto truth = test::run(
+        test::binDir() + "/wifi-sim " + scenario + " /dev/null -q -d 1 -t " + tmp.file("truth"));
+    ASSERT_EQ(truth.exitCode, 0) << truth.output;
+    const auto devicesTruth = tmp.file("truth/transmitters.yaml");
+
+    const double seconds = 16;
+    const uint16_t csiPort = test::freeLoopbackPort(SOCK_DGRAM);
+    uint16_t odoPort = test::freeLoopbackPort(SOCK_DGRAM);
+    if (odoPort == csiPort) odoPort = uint16_t(csiPort + 1);
+    test::EmulatorProcess emu(
+        {"--scenario", scenario, "--preconfigured", "6/20", "--odometry-port",
+         std::to_string(odoPort)},
+        csiPort, seconds + 30);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    auto keys = baseKeys(csiPort, odoPort);
+    keys["wifi-localize/bearing_algorithm"] =
+        "aoa_only\nmap_devices = true\nmap_update_period_s = 2";
+    keys["LocalizationExperiment/particles_count"] = "300";
+    keys["KLD_options/KLD_minSampleSize"] = keys["KLD_options/KLD_maxSampleSize"] = "300";
+    const auto ini = deriveIni(keys, {}, tmp.file("live.ini"));
+    const auto live = test::run(
+        "cd " + tmp.path().string() + " && timeout " + std::to_string(int(seconds + 60)) + " " +
+        test::binDir() + "/wifi-localize -p " + test::libDir() + "/libmrpt_wifi_sensor.so " + ini +
+        " -o live -r seen.rawlog --devices-truth " + devicesTruth + " -d " +
+        std::to_string(int(seconds)));
+    emu.stop();
+    ASSERT_EQ(live.exitCode, 0) << live.output;
+
+    // While driving: the device map is printed every 2 s, and devices appear on it.
+    const std::regex liveLine(R"(\] t=[0-9.]+s devices:([^\n]*))");
+    std::vector<std::string> updates;
+    for (std::sregex_iterator it(live.output.begin(), live.output.end(), liveLine), end; it != end;
+         ++it)
+        updates.push_back((*it)[1]);
+    ASSERT_GE(updates.size(), 4u) << live.output;
+    EXPECT_NE(updates.back().find("thermostat ("), std::string::npos) << live.output;
+    EXPECT_NE(updates.back().find("camera ("), std::string::npos) << live.output;
+
+    // Offline, on what wifi-localize recorded (its bearings and the odometry stream).
+    const auto off = test::run(
+        test::binDir() + "/wifi-iot-map -r " + tmp.file("seen.rawlog") + " --truth " +
+        devicesTruth + " -q --no-plots -o " + tmp.file("off"));
+    ASSERT_EQ(off.exitCode, 0) << off.output;
+    const auto liveCsv = test::readFile(tmp.file("live/devices.csv"));
+    const auto offCsv = test::readFile(tmp.file("off/devices.csv"));
+    // The final live map is the offline map: same devices, positions, covariances, counts.
+    EXPECT_EQ(liveCsv, offCsv) << live.output << off.output;
+    size_t localized = 0;
+    std::istringstream csv(liveCsv);
+    std::string line;
+    std::getline(csv, line);  // header
+    while (std::getline(csv, line)) localized += line.find(",1,") != std::string::npos;
+    EXPECT_EQ(localized, 3u) << liveCsv;
+    std::cout << live.output.substr(live.output.find("  device map")) << "\n";
+}

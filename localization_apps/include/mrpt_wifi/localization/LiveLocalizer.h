@@ -9,6 +9,7 @@
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <optional>
@@ -91,6 +92,44 @@ private:
     double lastStepTime_ = 0;
     size_t steps_ = 0;
     uint64_t bearingsUsed_ = 0, unknown_ = 0;
+};
+
+/** Live device mapping: wifi-iot-map's machinery (raysFromBearings + triangulateDevice) on the
+ *  AoA bearings and odometry seen so far. The inputs are kept exactly as readRawlog() would read
+ *  them from a rawlog of the same observations (odometry sorted and strictly increasing in time,
+ *  bearings stably sorted by time), so the map after the last observation equals
+ *  `wifi-iot-map --rawlog` on that rawlog with the same options. Options: section
+ *  `[wifi-localize]`, keys `map_devices` (bool), `map_min_std_deg`, `map_outlier_prob`,
+ *  `map_loss`, `map_grid_m`, `map_update_period_s` (wifi-iot-map's defaults). */
+class LiveDeviceMapper
+{
+public:
+    /** Reads the options; enabled() is false unless `map_devices = true`. */
+    LiveDeviceMapper(const mrpt::config::CConfigFileBase& ini, const std::string& section);
+
+    bool enabled() const { return enabled_; }
+    double updatePeriod_s() const { return updatePeriod_s_; }
+    const DeviceMapOptions& options() const { return opts_; }
+
+    void addOdometry(const mrpt::obs::CObservationOdometry& odo);
+    /** Bearings without AoA are ignored (as wifi-iot-map does). */
+    void addBearing(const CObservationWiFiBearing& b);
+    size_t bearings() const { return bearings_.size(); }
+
+    /** Triangulates every device from everything seen so far (the costly part: a grid search
+     *  per device) and keeps the result in devices(). */
+    void update();
+    const std::vector<DeviceEstimate>& devices() const { return devices_; }
+    const InputWarnings& warnings() const { return warnings_; }
+
+private:
+    bool enabled_ = false;
+    double updatePeriod_s_ = 2.0;
+    DeviceMapOptions opts_;
+    std::vector<std::pair<double, mrpt::math::TPose2D>> odometry_;
+    std::vector<BearingRecord> bearings_;
+    std::vector<DeviceEstimate> devices_;
+    InputWarnings warnings_;
 };
 
 }  // namespace mrpt_wifi::localization
