@@ -62,6 +62,11 @@ int main(int argc, char** argv)
                 "With odometry: its position noise [m per sqrt(m) travelled] (yaw: 1 deg per "
                 "sqrt(m) times this / 0.02)",
                 false, 0.02, "S", cmd);
+            TCLAP::SwitchArg argTrustOdometry(
+                "", "trust-odometry",
+                "Take the odometry (--odometry-tum or the rawlog's) as the exact trajectory "
+                "instead of estimating it jointly, as wifi-localize's live device map does",
+                cmd);
             TCLAP::ValueArg<std::string> argPose(
                 "", "sensor-pose",
                 "Receive array on the robot for CSV bearings: x y z yaw pitch roll (m, deg)", false,
@@ -125,11 +130,11 @@ int main(int argc, char** argv)
                 throw std::invalid_argument("give --trajectory or --odometry-tum, not both");
             if (argOdo.isSet()) odo = Trajectory2D::fromTumFile(argOdo.getValue());
             if (argTraj.isSet()) traj = Trajectory2D::fromTumFile(argTraj.getValue());
-            const bool joint = traj.empty() && !odo.empty();
             if (traj.empty() && odo.empty())
                 throw std::runtime_error(
                     "no trajectory: give --trajectory, --odometry-tum or a rawlog with odometry");
-            if (joint)
+            // Without --initial-pose the odometry's own frame is the map frame.
+            if (!odo.empty() && argInit.isSet())
             {
                 // Odometry re-anchored at --initial-pose: T ⊕ (odo₀⁻¹ ⊕ odo_k).
                 std::istringstream is(argInit.getValue());
@@ -140,6 +145,8 @@ int main(int argc, char** argv)
                 const mrpt::poses::CPose2D o0(odo.poses.front());
                 for (auto& p : odo.poses) p = (T + (mrpt::poses::CPose2D(p) - o0)).asTPose();
             }
+            if (traj.empty() && argTrustOdometry.getValue()) traj = odo;
+            const bool joint = traj.empty() && !odo.empty();
             if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
 
             std::set<MacAddress> only;

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <regex>
@@ -27,8 +28,8 @@ namespace
 {
 const std::string kShare = test::sourceDir() + "/share";
 
-/** share/localization/wifi-localize-emulator.ini with [section] key values replaced (absolute
- *  paths, test ports) and sections dropped. */
+/** share/localization/wifi-localize-emulator.ini with [section] key values replaced or added
+ *  (absolute paths, test ports) and sections dropped. */
 std::string deriveIni(
     const std::map<std::string, std::string>& keys, const std::set<std::string>& dropSections,
     const std::string& out)
@@ -36,9 +37,20 @@ std::string deriveIni(
     std::istringstream in(test::readFile(kShare + "/localization/wifi-localize-emulator.ini"));
     std::ostringstream o;
     std::string section;
+    std::set<std::string> written;
+    const auto addMissing = [&]
+    {
+        for (const auto& [sectionKey, value] : keys)
+            if (sectionKey.rfind(section + "/", 0) == 0 && written.insert(sectionKey).second)
+                o << sectionKey.substr(section.size() + 1) << " = " << value << "\n";
+    };
     for (std::string line; std::getline(in, line);)
     {
-        if (!line.empty() && line[0] == '[') section = line.substr(1, line.find(']') - 1);
+        if (!line.empty() && line[0] == '[')
+        {
+            if (!dropSections.count(section)) addMissing();
+            section = line.substr(1, line.find(']') - 1);
+        }
         if (dropSections.count(section)) continue;
         const auto eq = line.find('=');
         if (eq != std::string::npos && line[0] != ';')
@@ -48,18 +60,47 @@ std::string deriveIni(
             if (auto it = keys.find(section + "/" + key); it != keys.end())
             {
                 o << key << " = " << it->second << "\n";
+                written.insert(it->first);
                 continue;
             }
         }
         o << line << "\n";
     }
+    if (!dropSections.count(section)) addMissing();
     std::ofstream(out) << o.str();
     return out;
+}
+
+/** The emulated APs' transmit-chain calibration: like real ones, every AP's chains have their
+ *  own phases, so AoD needs them calibrated. A 40 s drive of the scenario the emulator plays
+ *  (kidnapped.yaml, seed 7) and wifi-calibrate --transmit-chains (--force: two APs are seen
+ *  from fewer distinct bearings than it asks for). Made once per build tree (it is
+ *  deterministic); tests running in parallel each make their own and the first rename wins. */
+std::string apCalibration()
+{
+    const std::string dir = test::binDir() + "/../test-cache/kidnapped-ap-calibration";
+    if (std::filesystem::is_directory(dir)) return dir;
+    test::TempDir tmp;
+    const auto sim = test::run(
+        test::binDir() + "/wifi-sim " + kShare + "/scenarios/kidnapped.yaml " +
+        tmp.file("drive.rawlog") + " --seed 7 -d 40 -q -t " + tmp.file("truth"));
+    EXPECT_EQ(sim.exitCode, 0) << sim.output;
+    const auto cal = test::run(
+        test::binDir() + "/wifi-calibrate " + tmp.file("drive.rawlog") + " --array " + kShare +
+        "/arrays/rt-ac86u.yaml --transmitters " + tmp.file("truth/transmitters.yaml") +
+        " --poses " + tmp.file("truth/trajectory_tum.txt") +
+        " --transmit-chains --force -q --out " + tmp.file("calib"));
+    EXPECT_EQ(cal.exitCode, 0) << cal.output;
+    std::filesystem::create_directories(std::filesystem::path(dir).parent_path());
+    std::error_code ec;  // another test may have renamed its copy first: same content
+    std::filesystem::rename(tmp.file("calib"), dir, ec);
+    return dir;
 }
 
 std::map<std::string, std::string> baseKeys(uint16_t csiPort, uint16_t odoPort)
 {
     return {
+        {"wifi-localize/bearing_calibration", apCalibration()},
         {"WIFI_CSI/udp_port", std::to_string(csiPort)},
         {"ODOMETRY/udp_port", std::to_string(odoPort)},
         {"wifi-localize/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
@@ -256,8 +297,8 @@ TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
     // wifi-pf-localization, bearings only (the capture has no odometry either).
     const auto bearings = test::run(
         test::binDir() + "/csi-bearings " + tmp.file("sim.rawlog") + " " + tmp.file("b.rawlog") +
-        " --algo aod --tx-array " + kShare + "/arrays/ap-linear-4.yaml --csv " + tmp.file("b.csv") +
-        " -q");
+        " --algo aod --tx-array " + kShare + "/arrays/ap-linear-4.yaml --calib " + apCalibration() +
+        " --csv " + tmp.file("b.csv") + " -q");
     ASSERT_EQ(bearings.exitCode, 0) << bearings.output;
     std::filesystem::remove(tmp.file("sim.rawlog"));
     {
@@ -349,6 +390,7 @@ TEST(WifiLocalize, MapsDevicesLiveAndEndsWithTheOfflineMap)
         csiPort, seconds + 30);
     ASSERT_TRUE(emu.ready()) << emu.log();
     auto keys = baseKeys(csiPort, odoPort);
+    keys.erase("wifi-localize/bearing_calibration");  // AoA: no AP calibration needed
     keys["wifi-localize/bearing_algorithm"] =
         "aoa_only\nmap_devices = true\nmap_update_period_s = 2";
     keys["LocalizationExperiment/particles_count"] = "300";
@@ -374,8 +416,8 @@ TEST(WifiLocalize, MapsDevicesLiveAndEndsWithTheOfflineMap)
 
     // Offline, on what wifi-localize recorded (its bearings and the odometry stream).
     const auto off = test::run(
-        test::binDir() + "/wifi-iot-map -r " + tmp.file("seen.rawlog") + " --truth " +
-        devicesTruth + " -q --no-plots -o " + tmp.file("off"));
+        test::binDir() + "/wifi-iot-map -r " + tmp.file("seen.rawlog") +
+        " --trust-odometry --truth " + devicesTruth + " -q --no-plots -o " + tmp.file("off"));
     ASSERT_EQ(off.exitCode, 0) << off.output;
     const auto liveCsv = test::readFile(tmp.file("live/devices.csv"));
     const auto offCsv = test::readFile(tmp.file("off/devices.csv"));
