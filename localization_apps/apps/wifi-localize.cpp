@@ -359,12 +359,12 @@ public:
                 {
                     while (!stop_)
                     {
-                        std::optional<Snapshot> s;
+                        std::optional<Snapshot> latest;
                         {
                             std::lock_guard<std::mutex> lk(mtx_);
-                            s.swap(next_);
+                            latest.swap(next_);
                         }
-                        if (s) draw(*s);
+                        if (latest) draw(*latest);
                         std::this_thread::sleep_for(std::chrono::milliseconds(100));
                     }
                 });

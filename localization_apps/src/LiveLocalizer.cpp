@@ -1,10 +1,12 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/Clock.h>
+#include <mrpt/core/bits_math.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,18 +17,15 @@ namespace mrpt_wifi::localization
 mrpt::obs::CActionRobotMovement2D unknownMotionAction(
     double dt_s, double maxSpeed_mps, double maxTurnRate_rps)
 {
-    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions m;
-    m.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
-    m.gaussianModel.a1 = m.gaussianModel.a2 = m.gaussianModel.a3 = m.gaussianModel.a4 = 0;
-    // A random walk: the variance grows linearly with time (std ∝ sqrt(dt)), so the spread
-    // after a second is the same however the second is cut into filter steps; after 1 s the
-    // std is the speed bound itself.
-    const double dt = std::clamp(dt_s, 1e-4, 5.0);
-    m.gaussianModel.minStdXY = maxSpeed_mps * std::sqrt(dt);
-    m.gaussianModel.minStdPHI = maxTurnRate_rps * std::sqrt(dt);
-    mrpt::obs::CActionRobotMovement2D act;
-    act.computeFromOdometry(mrpt::poses::CPose2D(0, 0, 0), m);
-    return act;
+    // UnknownMotion's random walk (no constant-velocity prediction) with a 1 s horizon.
+    UnknownMotion m;
+    m.maxSpeed_mps = maxSpeed_mps;
+    m.maxTurnRate_dps = mrpt::RAD2DEG(maxTurnRate_rps);
+    m.correlationTime_s = 1.0;
+    m.maxStep_s = 5.0;
+    m.minStdXY_m = m.minStdPhi_deg = 0;
+    m.constantVelocity = false;
+    return *m.makeAction(std::max(dt_s, 1e-4));
 }
 
 void LiveLocalizerOptions::loadFromConfigFile(

@@ -18,8 +18,8 @@
 
 namespace mrpt_wifi::localization
 {
-/** Motion of a robot whose odometry is unknown, for MRPT's particle filter: no displacement,
- *  a Gaussian random walk of std `maxSpeed · sqrt(dt · 1 s)` in x and y and
+/** Motion of a robot whose odometry is unknown, for MRPT's particle filter: UnknownMotion's
+ *  zero-mean random walk with a 1 s horizon, std `maxSpeed · sqrt(dt · 1 s)` in x and y and
  *  `maxTurnRate · sqrt(dt · 1 s)` in yaw (variance linear in time, so the spread does not depend
  *  on how often the filter steps; after one second it is the speed bound). */
 mrpt::obs::CActionRobotMovement2D unknownMotionAction(
