@@ -168,11 +168,24 @@ inline double percentile(std::vector<double> v, double p)
     return i + 1 < v.size() ? v[i] + (pos - double(i)) * (v[i + 1] - v[i]) : v[i];
 }
 
-/** Runs one estimator on a dataset. Linear arrays: error to the nearer of the two reported
- *  mirror candidates (resolving the mirror needs motion or a 2-D array, not this estimator). */
-inline AccuracyStats evaluate(
-    const AccuracyDataset& d, const std::string& algo,
-    const mrpt::containers::yaml& params = mrpt::containers::yaml())
+/** What forEachEstimate() hands over per estimate. */
+struct EstimateOnWindow
+{
+    const bearing::BearingResult& result;
+    const std::vector<const CleanCsi*>& frames;  //!< the preprocessed window it used
+    size_t window;                               //!< index into the dataset's windows / truth
+    double aoaError_rad;  //!< to the nearer reported candidate (mirror of linear arrays)
+    double streams;       //!< transmit streams over the window (for the CRB)
+};
+
+/** Runs an estimator over every window of a dataset (each preprocessed as the bearing chain
+ *  would) and calls `use` per estimate it made; returns the number of windows it produced
+ *  nothing for. Linear arrays: the error is to the nearer of the two reported mirror
+ *  candidates (resolving the mirror needs motion or a 2-D array, not this estimator). */
+template <class Use>
+size_t forEachEstimate(
+    const AccuracyDataset& d, const std::string& algo, const mrpt::containers::yaml& params,
+    Use&& use)
 {
     auto est = bearing::createEstimator(algo, params);
     CsiPreprocessor pre(
@@ -187,51 +200,76 @@ inline AccuracyStats evaluate(
         const auto it = d.txArrays.find(m);
         return it == d.txArrays.end() ? nullptr : &it->second;
     };
-    size_t inside = 0;
-    std::vector<double> errors, crbs, ratios, centralRatios, centralErrors, aodErrors, quality,
-        stds;
+    size_t missing = 0;
     for (size_t e = 0; e < d.windows.size(); ++e)
     {
         const auto& w = d.windows[e];
-        const size_t use = std::min<size_t>(est->framesWanted(), w.size());
-        clean.resize(use);
+        const size_t n = std::min<size_t>(est->framesWanted(), w.size());
+        clean.resize(n);
         ptrs.clear();
-        for (size_t n = 0; n < use; ++n)
+        for (size_t k = 0; k < n; ++k)
         {
-            if (pre.process(w[w.size() - use + n], clean[n]) != RejectReason::Accepted) continue;
-            ptrs.push_back(&clean[n]);
+            if (pre.process(w[w.size() - n + k], clean[k]) != RejectReason::Accepted) continue;
+            ptrs.push_back(&clean[k]);
         }
         bearing::BearingResult r;
-        if (ptrs.empty() || !est->estimate(ptrs, ctx, r) || !r.valid) continue;
+        if (ptrs.empty() || !est->estimate(ptrs, ctx, r) || !r.valid)
+        {
+            ++missing;
+            continue;
+        }
         const auto& truth = d.truth[e];
         double err = angleDistance(r.aoa_rad, truth.aoa_rad);
         if (r.aoaAmbiguous) err = std::min(err, angleDistance(r.aoaMirror_rad, truth.aoa_rad));
-        const auto& layout = *ptrs.back()->layout;
         double streams = 0;
         for (const auto* p : ptrs) streams += p->nTx;
-        const double crb = d.rx.aoaCramerRaoBound(
-            truth.aoa_rad, layout.frequencies_Hz, std::pow(10.0, d.snr_dB / 10), streams);
-        errors.push_back(err * 180 / M_PI);
-        crbs.push_back(crb * 180 / M_PI);
-        ratios.push_back(err / crb);
-        const double offBroadside = std::min(
-            angleDistance(truth.aoa_rad, d.rx.broadside()),
-            angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
-        if (offBroadside <= M_PI / 3)
-        {
-            centralRatios.push_back(err / crb);
-            centralErrors.push_back(err * 180 / M_PI);
-        }
-        quality.push_back(r.quality);
-        stds.push_back(r.aoaStd_rad * 180 / M_PI);
-        if (err <= 3 * r.aoaStd_rad) ++inside;
-        if (r.hasAod)
-        {
-            double ae = angleDistance(r.aod_rad, truth.aod_rad);
-            if (r.aodAmbiguous) ae = std::min(ae, angleDistance(r.aodMirror_rad, truth.aod_rad));
-            aodErrors.push_back(ae * 180 / M_PI);
-        }
+        use(EstimateOnWindow{r, ptrs, e, err, streams});
     }
+    return missing;
+}
+
+/** Runs one estimator on a dataset. Linear arrays: error to the nearer of the two reported
+ *  mirror candidates (resolving the mirror needs motion or a 2-D array, not this estimator). */
+inline AccuracyStats evaluate(
+    const AccuracyDataset& d, const std::string& algo,
+    const mrpt::containers::yaml& params = mrpt::containers::yaml())
+{
+    size_t inside = 0;
+    std::vector<double> errors, crbs, ratios, centralRatios, centralErrors, aodErrors, quality,
+        stds;
+    forEachEstimate(
+        d, algo, params,
+        [&](const EstimateOnWindow& x)
+        {
+            const auto& r = x.result;
+            const auto& truth = d.truth[x.window];
+            const double err = x.aoaError_rad;
+            const double streams = x.streams;
+            const auto& layout = *x.frames.back()->layout;
+            const double crb = d.rx.aoaCramerRaoBound(
+                truth.aoa_rad, layout.frequencies_Hz, std::pow(10.0, d.snr_dB / 10), streams);
+            errors.push_back(err * 180 / M_PI);
+            crbs.push_back(crb * 180 / M_PI);
+            ratios.push_back(err / crb);
+            const double offBroadside = std::min(
+                angleDistance(truth.aoa_rad, d.rx.broadside()),
+                angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
+            if (offBroadside <= M_PI / 3)
+            {
+                centralRatios.push_back(err / crb);
+                centralErrors.push_back(err * 180 / M_PI);
+            }
+            quality.push_back(r.quality);
+            stds.push_back(r.aoaStd_rad * 180 / M_PI);
+            if (err <= 3 * r.aoaStd_rad) ++inside;
+            if (r.hasAod)
+            {
+                double ae = angleDistance(r.aod_rad, truth.aod_rad);
+                if (r.aodAmbiguous)
+                    ae = std::min(ae, angleDistance(r.aodMirror_rad, truth.aod_rad));
+                aodErrors.push_back(ae * 180 / M_PI);
+            }
+        });
     AccuracyStats s;
     s.algorithm = algo;
     s.count = errors.size();
@@ -274,56 +312,24 @@ inline size_t collectErrors(
     const AccuracyDataset& d, const std::string& algo, std::vector<ErrorRecord>& out,
     const mrpt::containers::yaml& params = mrpt::containers::yaml())
 {
-    auto est = bearing::createEstimator(algo, params);
-    CsiPreprocessor pre(
-        {}, d.rx,
-        d.calibration ? CalibrationStore::fromCalibration(*d.calibration) : CalibrationStore());
-    std::vector<CleanCsi> clean;
-    std::vector<const CleanCsi*> ptrs;
-    bearing::EstimatorContext ctx;
-    ctx.rxArray = &d.rx;
-    ctx.txArrayOf = [&](const MacAddress& m) -> const AntennaArray*
-    {
-        const auto it = d.txArrays.find(m);
-        return it == d.txArrays.end() ? nullptr : &it->second;
-    };
-    size_t missing = 0;
-    for (size_t e = 0; e < d.windows.size(); ++e)
-    {
-        const auto& w = d.windows[e];
-        const size_t use = std::min<size_t>(est->framesWanted(), w.size());
-        clean.resize(use);
-        ptrs.clear();
-        for (size_t n = 0; n < use; ++n)
+    return forEachEstimate(
+        d, algo, params,
+        [&](const EstimateOnWindow& x)
         {
-            if (pre.process(w[w.size() - use + n], clean[n]) != RejectReason::Accepted) continue;
-            ptrs.push_back(&clean[n]);
-        }
-        bearing::BearingResult r;
-        if (ptrs.empty() || !est->estimate(ptrs, ctx, r) || !r.valid)
-        {
-            ++missing;
-            continue;
-        }
-        const auto& truth = d.truth[e];
-        double err = angleDistance(r.aoa_rad, truth.aoa_rad);
-        if (r.aoaAmbiguous) err = std::min(err, angleDistance(r.aoaMirror_rad, truth.aoa_rad));
-        double streams = 0;
-        for (const auto* p : ptrs) streams += p->nTx;
-        ErrorRecord rec;
-        rec.error_deg = err * 180 / M_PI;
-        rec.std_deg = r.aoaStd_rad * 180 / M_PI;
-        rec.crb_deg = d.rx.aoaCramerRaoBound(
-                          truth.aoa_rad, ptrs.back()->layout->frequencies_Hz,
-                          std::pow(10.0, d.snr_dB / 10), streams) *
-                      180 / M_PI;
-        const double offBroadside = std::min(
-            angleDistance(truth.aoa_rad, d.rx.broadside()),
-            angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
-        rec.central = offBroadside <= 75 * M_PI / 180;
-        out.push_back(rec);
-    }
-    return missing;
+            const auto& truth = d.truth[x.window];
+            ErrorRecord rec;
+            rec.error_deg = x.aoaError_rad * 180 / M_PI;
+            rec.std_deg = x.result.aoaStd_rad * 180 / M_PI;
+            rec.crb_deg = d.rx.aoaCramerRaoBound(
+                              truth.aoa_rad, x.frames.back()->layout->frequencies_Hz,
+                              std::pow(10.0, d.snr_dB / 10), x.streams) *
+                          180 / M_PI;
+            const double offBroadside = std::min(
+                angleDistance(truth.aoa_rad, d.rx.broadside()),
+                angleDistance(d.rx.mirrorOf(truth.aoa_rad), d.rx.broadside()));
+            rec.central = offBroadside <= 75 * M_PI / 180;
+            out.push_back(rec);
+        });
 }
 
 /** The issue-10 figures over many rooms. */
