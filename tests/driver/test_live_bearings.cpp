@@ -12,6 +12,7 @@
 #include <ctime>
 #include <future>
 
+#include "SensorConfigError.h"
 #include "TestSupport.h"
 
 using namespace mrpt_wifi;
@@ -99,17 +100,7 @@ std::string today()
 
 std::string configError(const std::string& keys)
 {
-    mrpt::config::CConfigFileMemory cfg("[CSI]\nprocess_rate = 100\n" + keys);
-    CWiFiCSISensor sensor;
-    try
-    {
-        sensor.loadConfig(cfg, "CSI");
-    }
-    catch (const std::exception& e)
-    {
-        return e.what();
-    }
-    return {};
+    return test::sensorConfigError("[CSI]\nprocess_rate = 100\n" + keys);
 }
 }  // namespace
 

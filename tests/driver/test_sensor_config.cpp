@@ -2,25 +2,9 @@
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt_wifi/sensor/CWiFiCSISensor.h>
 
-using namespace mrpt_wifi;
+#include "SensorConfigError.h"
 
-namespace
-{
-std::string loadError(const std::string& ini)
-{
-    mrpt::config::CConfigFileMemory cfg(ini);
-    CWiFiCSISensor sensor;
-    try
-    {
-        sensor.loadConfig(cfg, "CSI");
-    }
-    catch (const std::exception& e)
-    {
-        return e.what();
-    }
-    return {};
-}
-}  // namespace
+using namespace mrpt_wifi;
 
 TEST(CWiFiCSISensorConfig, RegisteredForRawlogGrabber)
 {
@@ -32,39 +16,43 @@ TEST(CWiFiCSISensorConfig, RegisteredForRawlogGrabber)
 TEST(CWiFiCSISensorConfig, ValidConfigurationLoads)
 {
     EXPECT_EQ(
-        loadError("[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nsensorLabel = CSI_FRONT\n"
-                  "udp_port = 5600\nmac_filter = 11:11:11:*:*:*, 00:12:34:56:78:9b\n"
-                  "pose_yaw = 90\nchannel = 157/80\nrouter_control = true\nlogin_host = 127.0.0.1\n"
-                  "scan_period = 20\nauto_channel = true\ncore_mask = 0x3\n"),
+        test::sensorConfigError(
+            "[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nsensorLabel = CSI_FRONT\n"
+            "udp_port = 5600\nmac_filter = 11:11:11:*:*:*, 00:12:34:56:78:9b\n"
+            "pose_yaw = 90\nchannel = 157/80\nrouter_control = true\nlogin_host = 127.0.0.1\n"
+            "scan_period = 20\nauto_channel = true\ncore_mask = 0x3\n"),
         "");
 }
 
 TEST(CWiFiCSISensorConfig, WrongKeysAndValuesAreNamed)
 {
     // A typo: named, with its section and the key it probably meant.
-    auto e = loadError("[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nudp_prot = 5500\n");
+    auto e = test::sensorConfigError(
+        "[CSI]\ndriver = CWiFiCSISensor\nprocess_rate = 100\nudp_prot = 5500\n");
     EXPECT_NE(e.find("section 'CSI': unknown key 'udp_prot'"), std::string::npos) << e;
     EXPECT_NE(e.find("did you mean 'udp_port'"), std::string::npos) << e;
 
-    e = loadError("[CSI]\nprocess_rate = 100\nudp_port = 70000\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nudp_port = 70000\n");
     EXPECT_NE(e.find("udp_port"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nchannel = 157/160\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nchannel = 157/160\n");
     EXPECT_NE(e.find("157/160"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nmac_filter = 11:11:1x:*:*:*\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nmac_filter = 11:11:1x:*:*:*\n");
     EXPECT_NE(e.find("11:11:1x"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nscanner = radar\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nscanner = radar\n");
     EXPECT_NE(e.find("'scanner'"), std::string::npos) << e;
     // The host's own card may scan without router control; router scans may not.
-    EXPECT_EQ(loadError("[CSI]\nprocess_rate = 100\nscan_period = 10\nscanner = host\n"), "");
-    e = loadError("[CSI]\nprocess_rate = 100\nscan_period = 10\n");
+    EXPECT_EQ(
+        test::sensorConfigError("[CSI]\nprocess_rate = 100\nscan_period = 10\nscanner = host\n"),
+        "");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nscan_period = 10\n");
     EXPECT_NE(e.find("router_control"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nsource = serial\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nsource = serial\n");
     EXPECT_NE(e.find("'source'"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nsource = pcap\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nsource = pcap\n");
     EXPECT_NE(e.find("pcap_file"), std::string::npos) << e;
-    e = loadError("[CSI]\nprocess_rate = 100\nauto_channel = true\n");
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nauto_channel = true\n");
     EXPECT_NE(e.find("router_control"), std::string::npos) << e;
-    e = loadError(
+    e = test::sensorConfigError(
         "[CSI]\nprocess_rate = 100\npacket_mac_filter = "
         "02:00:00:00:00:01,02:00:00:00:00:02,02:00:00:00:00:03,02:00:00:00:00:04,02:00:00:00:00:"
         "05\n");
@@ -80,14 +68,15 @@ TEST(CWiFiCSISensorConfig, ValuesForTheRouterShellAreValidated)
              {"eth6; reboot", "eth6 && reboot", "$(reboot)", "`reboot`", "eth6|reboot", "a b",
               "x'y", "eth6>/jffs/x"})
         {
-            const auto e = loadError(
+            const auto e = test::sensorConfigError(
                 std::string("[CSI]\nprocess_rate = 100\nrouter_control = true\n") + key + " = " +
                 value + "\n");
             EXPECT_NE(e.find(std::string("key '") + key + "'"), std::string::npos)
                 << key << " = " << value << ": " << e;
         }
     EXPECT_EQ(
-        loadError("[CSI]\nprocess_rate = 100\nsetup_interface_5g = wl0.1\nsetup_bridge = br-lan\n"
-                  "setup_module_path = /jffs/nexmon/dhd_v2.ko\n"),
+        test::sensorConfigError(
+            "[CSI]\nprocess_rate = 100\nsetup_interface_5g = wl0.1\nsetup_bridge = br-lan\n"
+            "setup_module_path = /jffs/nexmon/dhd_v2.ko\n"),
         "");
 }

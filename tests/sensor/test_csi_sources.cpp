@@ -125,9 +125,9 @@ INSTANTIATE_TEST_SUITE_P(
         NexmonSample{"bcm4339-80mhz", nexmon::Chip::BCM4339},
         NexmonSample{"bcm43455c0-80mhz", nexmon::Chip::BCM43455c0},
         NexmonSample{"bcm4358-80mhz", nexmon::Chip::BCM4358}),
-    [](const auto& info)
+    [](const auto& sample)
     {
-        std::string n = info.param.file;
+        std::string n = sample.param.file;
         std::replace(n.begin(), n.end(), '-', '_');
         return n;
     });

@@ -98,7 +98,7 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why)
     // read_bf_file applies the permutation only when perm(1:Nrx) sums to 1+..+Nrx.
     unsigned sum = 0;
     for (unsigned i = 0; i < r.nRx; ++i) sum += r.perm[i] + 1u;
-    r.permValid = r.nRx > 1 && sum == r.nRx * (r.nRx + 1) / 2;
+    r.permValid = r.nRx > 1 && sum == unsigned(r.nRx) * (unsigned(r.nRx) + 1) / 2;
     r.csi = raw;
     if (r.permValid)
         for (unsigned tx = 0; tx < r.nTx; ++tx)
