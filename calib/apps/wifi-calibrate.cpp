@@ -160,7 +160,7 @@ int main(int argc, char** argv)
             if (argTx.isSet())
             {
                 const auto v = numbers(argTx.getValue(), 2, "--tx-position");
-                sites.push_back({"tx", std::nullopt, {v[0], v[1]}});
+                sites.push_back({"tx", std::nullopt, {v[0], v[1]}, std::nullopt, std::nullopt});
             }
             else if (argTxFile.isSet())
                 sites = loadTransmitterSites(argTxFile.getValue());

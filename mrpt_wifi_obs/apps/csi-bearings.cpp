@@ -311,9 +311,9 @@ int main(int argc, char** argv)
                     // What was not measured is an empty cell, never a 0 that reads as an angle.
                     const auto deg = [&](bool measured, double rad)
                     {
-                        std::ostringstream c;
-                        if (measured) c << std::fixed << std::setprecision(3) << rad * toDeg;
-                        return c.str();
+                        std::ostringstream cell;
+                        if (measured) cell << std::fixed << std::setprecision(3) << rad * toDeg;
+                        return cell.str();
                     };
                     csv << std::setprecision(6) << mrpt::Clock::toDouble(b->timestamp) << ","
                         << b->transmitter.asString() << "," << b->chanspec.asString() << ","

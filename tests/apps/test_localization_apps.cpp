@@ -402,7 +402,10 @@ TEST(LocalizationAppsCsv, CsiBearingsLeavesUnmeasuredCellsEmpty)
             ++noAod;
             EXPECT_TRUE(c[aod].empty()) << line;
         }
-        if (c[amb] == "0") EXPECT_TRUE(c[mir].empty()) << line;
+        if (c[amb] == "0")
+        {
+            EXPECT_TRUE(c[mir].empty()) << line;
+        }
     }
     EXPECT_GT(rows, 10u);
     InputWarnings w;
