@@ -379,14 +379,14 @@ void encodeDatagram(
     switch (h.variant)
     {
         case NexmonHeaderVariant::Nexmon:
-            p[2] = uint8_t(h.rssi_dBm);
-            p[3] = h.frameControl;
-            csiconf = uint16_t((h.core & 7) << 8 | (h.stream & 7) << 11);
-            word16 = h.chipId;
-            break;
         case NexmonHeaderVariant::NexmonLegacy:
-            p[2] = p[3] = 0x11;
-            csiconf = uint16_t((h.core & 7) << 8 | (h.stream & 7) << 11);
+            if (h.variant == NexmonHeaderVariant::Nexmon)
+                p[2] = uint8_t(h.rssi_dBm), p[3] = h.frameControl;
+            else
+                p[2] = p[3] = 0x11;
+            // 4366c0: core in bits 8–10, stream in 11–13; the other chips: bits 0–2, 3–5.
+            csiconf = h.chip == Chip::BCM4366c0 ? uint16_t((h.core & 7) << 8 | (h.stream & 7) << 11)
+                                                : uint16_t((h.core & 7) | (h.stream & 7) << 3);
             word16 = h.chipId;
             break;
         case NexmonHeaderVariant::UbiLocate:
@@ -402,11 +402,28 @@ void encodeDatagram(
     writeLE16(p + 14, h.chanspec.raw);
     writeLE16(p + 16, word16);
     const unsigned half = nfft / 2;
+    const bool int16Words = h.variant != NexmonHeaderVariant::UbiLocate &&
+                            (h.chip == Chip::BCM43455c0 || h.chip == Chip::BCM4339);
+    if (h.variant != NexmonHeaderVariant::UbiLocate && h.chip == Chip::BCM4358)
+        throw std::invalid_argument("encodeDatagram: bcm4358 packed words are decode-only");
+    const auto int16Of = [](float x)
+    { return uint16_t(int16_t(std::lround(std::clamp(x, -32768.0f, 32767.0f)))); };
     for (unsigned i = 0; i < nfft; ++i)
-        writeLE32(p + kHeaderBytes + 4 * i, packWord(subcarrierOrder[(i + half) & (nfft - 1)]));
+    {
+        const std::complex<float> v = subcarrierOrder[(i + half) & (nfft - 1)];
+        uint8_t* w = p + kHeaderBytes + 4 * i;
+        if (int16Words)
+        {
+            // int16 I (low half-word) and Q, rounded and saturated.
+            writeLE16(w, int16Of(v.real()));
+            writeLE16(w + 2, int16Of(v.imag()));
+        }
+        else
+            writeLE32(w, packWord(v));
+    }
 }
 
-DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned rx)
+DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned rx, Chip chip)
 {
     DatagramHeader h;
     h.variant = obs.headerVariant;
@@ -417,7 +434,8 @@ DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned r
     h.core = uint8_t(rx);
     h.stream = uint8_t(tx);
     h.chanspec = obs.chanspec;
-    h.chipId = obs.headerVariant == NexmonHeaderVariant::UbiLocate ? 0 : kChip4366c0;
+    h.chip = obs.headerVariant == NexmonHeaderVariant::UbiLocate ? Chip::BCM4366c0 : chip;
+    h.chipId = obs.headerVariant == NexmonHeaderVariant::UbiLocate ? 0 : chipWord(h.chip);
     h.firmwareCounter = obs.firmwareCounter;
     if (obs.headerVariant == NexmonHeaderVariant::UbiLocate)
     {
@@ -427,7 +445,23 @@ DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned r
     return h;
 }
 
-std::vector<std::vector<uint8_t>> encodeFrame(const CObservationWiFiCSI& obs)
+uint16_t chipWord(Chip c)
+{
+    switch (c)
+    {
+        case Chip::BCM4366c0:
+            return kChip4366c0;
+        case Chip::BCM43455c0:
+            return kChip43455c0;
+        case Chip::BCM4358:
+            return kChip4358;
+        case Chip::BCM4339:
+            return kChip4339;
+    }
+    return kChip4366c0;
+}
+
+std::vector<std::vector<uint8_t>> encodeFrame(const CObservationWiFiCSI& obs, Chip chip)
 {
     std::vector<std::vector<uint8_t>> datagrams;
     for (unsigned rx = 0; rx < obs.nRx; ++rx)
@@ -435,7 +469,7 @@ std::vector<std::vector<uint8_t>> encodeFrame(const CObservationWiFiCSI& obs)
         {
             if (!obs.isPresent(tx, rx)) continue;
             datagrams.emplace_back();
-            encodeDatagram(headerFor(obs, tx, rx), obs.pair(tx, rx), datagrams.back());
+            encodeDatagram(headerFor(obs, tx, rx, chip), obs.pair(tx, rx), datagrams.back());
         }
     return datagrams;
 }

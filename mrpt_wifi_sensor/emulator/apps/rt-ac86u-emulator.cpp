@@ -94,6 +94,22 @@ int main(int argc, char** argv)
                 "127.0.0.1:PORT and obeys the router tools wl, nexutil, makecsiparams, insmod, "
                 "rmmod, brctl run through STATE_DIR/bin/ (e.g. by an sshd). Loopback only.",
                 ' ', "0.1");
+            TCLAP::ValueArg<std::string> argDevice(
+                "", "device",
+                "The device to play: rt-ac86u (BCM4366c0 datagrams, router tools), raspberry-pi "
+                "(BCM43455c0 int16 datagrams, one core; tools nexutil, makecsiparams, ip, iw, "
+                "ifconfig; for `source = interface:lo`) or esp32 (esp-csi CSI_DATA lines on a "
+                "pseudo-terminal; for `source = serial:DEV`; needs --preconfigured CH)",
+                false, "rt-ac86u", "DEVICE", cmd);
+            TCLAP::ValueArg<std::string> argSerialLink(
+                "", "serial-link",
+                "esp32: make PATH a symbolic link to the pseudo-terminal (else its /dev/pts/N "
+                "name is printed and in the status JSON)",
+                false, "", "PATH", cmd);
+            TCLAP::ValueArg<std::string> argRecordSent(
+                "", "record-sent",
+                "Write everything sent: a pcap of the datagrams, or (esp32) the CSI_DATA lines",
+                false, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argScenario(
                 "", "scenario", "Scenario file (YAML, share/scenarios/)", false, "", "FILE.yaml");
             TCLAP::ValueArg<std::string> argReplay(
@@ -187,6 +203,9 @@ int main(int argc, char** argv)
             if (argFrameByte.getValue() > 255)
                 throw std::invalid_argument("--frame-byte must be 0..255");
             EmulatorOptions o;
+            o.device = emulatedDeviceFromString(argDevice.getValue());
+            o.serialLink = argSerialLink.getValue();
+            o.recordSentFile = argRecordSent.getValue();
             o.scenarioFile = argScenario.getValue();
             o.replayFile = argReplay.getValue();
             o.replayUdpPort = uint16_t(argReplayPort.getValue());
@@ -235,14 +254,31 @@ int main(int argc, char** argv)
             sigaction(SIGINT, &sa, nullptr);
             sigaction(SIGTERM, &sa, nullptr);
 
+            if (!emulator.serialDevice().empty())  // wherever the output goes: scripts need it
+                std::cerr << "[rt-ac86u-emulator] ESP32 serial port: " << emulator.serialDevice()
+                          << std::endl;
             if (!argQuiet.getValue())
             {
-                std::cerr << "[rt-ac86u-emulator] sending to " << emulator.destination().asString()
-                          << " (" << toString(o.format) << ")\n"
-                          << "[rt-ac86u-emulator] router tools: " << emulator.binDir()
-                          << "/{wl,nexutil,makecsiparams,insmod,rmmod,brctl,emulator-ctl}\n"
-                          << "[rt-ac86u-emulator] socket: " << emulator.socketPath() << "\n";
-                if (!o.preconfigured)
+                std::cerr << "[rt-ac86u-emulator] device " << toString(o.device);
+                if (o.device == EmulatedDevice::Esp32)
+                    std::cerr << ": CSI_DATA lines on " << emulator.serialDevice() << "\n";
+                else
+                    std::cerr << ": sending to " << emulator.destination().asString() << " ("
+                              << toString(o.format) << ")\n";
+                std::cerr << "[rt-ac86u-emulator] "
+                          << (o.device == EmulatedDevice::RaspberryPi
+                                  ? "Pi tools: " + emulator.binDir() +
+                                        "/{nexutil,makecsiparams,ip,iw,ifconfig,emulator-ctl}"
+                                  : "router tools: " + emulator.binDir() +
+                                        "/{wl,nexutil,makecsiparams,insmod,rmmod,brctl,"
+                                        "emulator-ctl}")
+                          << "\n[rt-ac86u-emulator] socket: " << emulator.socketPath() << "\n";
+                if (o.device == EmulatedDevice::RaspberryPi && !o.preconfigured)
+                    std::cerr << "[rt-ac86u-emulator] CSI is off until the Pi is set up "
+                                 "(ip link set wlan0 up; nexutil -Iwlan0 -s500 -b -l34 -v...; iw "
+                                 "dev wlan0 interface add mon0 type monitor; ip link set mon0 "
+                                 "up), or use --preconfigured CH/BW\n";
+                else if (o.device == EmulatedDevice::RtAc86u && !o.preconfigured)
                     std::cerr << "[rt-ac86u-emulator] CSI is off until the router is set up "
                                  "(rmmod dhd; insmod dhd.ko; brctl addif br0 eth6; wl ...; "
                                  "nexutil ...), or use --preconfigured CH/BW\n";

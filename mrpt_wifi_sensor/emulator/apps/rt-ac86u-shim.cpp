@@ -1,8 +1,9 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.
  *
  * rt-ac86u-shim: the router's command-line tools for the RT-AC86U emulator. Installed as links
- * named wl, nexutil, makecsiparams, insmod, rmmod, lsmod, brctl, ifconfig, usleep and
- * emulator-ctl (the emulator creates them in STATE_DIR/bin/); the link's name picks the tool. The
+ * named wl, nexutil, makecsiparams, insmod, rmmod, lsmod, brctl, ifconfig, ip, iw, usleep and
+ * emulator-ctl (the emulator creates them in STATE_DIR/bin/); the link's name picks the tool.
+ * (ip and iw are the Raspberry Pi's, for `--device raspberry-pi`.) The
  * command line goes to the emulator over its Unix socket; its stdout, stderr and exit code become
  * the shim's. */
 #include <mrpt_wifi/emulator/ControlSocket.h>
@@ -38,7 +39,8 @@ constexpr unsigned long kMaxUsleep_us = 60'000'000;
 constexpr const char* kUsage =
     "Usage: rt-ac86u-shim [--socket PATH] TOOL [ARGS...]\n"
     "   or: TOOL [ARGS...] through a link named wl, nexutil, makecsiparams, insmod, rmmod,\n"
-    "       lsmod, brctl, ifconfig, usleep or emulator-ctl (STATE_DIR/bin/ of the emulator).\n"
+    "       lsmod, brctl, ifconfig, ip, iw, usleep or emulator-ctl (STATE_DIR/bin/ of the\n"
+    "       emulator; ip and iw are the emulated Raspberry Pi's).\n"
     "The emulator's socket: --socket, else $RT_AC86U_EMULATOR_SOCKET, else\n"
     "<directory of the link>/../emulator.sock.\n";
 }  // namespace

@@ -73,8 +73,8 @@ bool isExecutableFile(const std::string& p)
 const std::vector<std::string>& shimToolNames()
 {
     static const std::vector<std::string> names = {
-        "wl",    "nexutil", "makecsiparams", "insmod", "rmmod",
-        "lsmod", "brctl",   "ifconfig",      "usleep", "emulator-ctl"};
+        "wl",    "nexutil",  "makecsiparams", "insmod",       "rmmod", "lsmod",
+        "brctl", "ifconfig", "usleep",        "emulator-ctl", "ip",    "iw"};
     return names;
 }
 

@@ -63,6 +63,27 @@ const char* toString(StopReason r)
     return "?";
 }
 
+const char* toString(EmulatedDevice d)
+{
+    switch (d)
+    {
+        case EmulatedDevice::RtAc86u:
+            return "rt-ac86u";
+        case EmulatedDevice::RaspberryPi:
+            return "raspberry-pi";
+        case EmulatedDevice::Esp32:
+            return "esp32";
+    }
+    return "?";
+}
+
+EmulatedDevice emulatedDeviceFromString(const std::string& s)
+{
+    for (auto d : {EmulatedDevice::RtAc86u, EmulatedDevice::RaspberryPi, EmulatedDevice::Esp32})
+        if (s == toString(d)) return d;
+    throw std::invalid_argument("device '" + s + "' (give rt-ac86u, raspberry-pi or esp32)");
+}
+
 std::string odometryDatagram(
     uint64_t seq, double simTime_s, const mrpt::math::TPose2D& odometry,
     const mrpt::math::TTwist2D& velocityLocal)
@@ -198,7 +219,9 @@ Emulator::Emulator(EmulatorOptions options)
     : opt_(std::move(options)),
       origin_(std::chrono::steady_clock::now()),
       unixOrigin_(mrpt::Clock::toDouble(mrpt::Clock::now())),
-      router_(opt_.timing),
+      router_(
+          opt_.timing, opt_.device == EmulatedDevice::RaspberryPi ? RouterKind::RaspberryPi
+                                                                  : RouterKind::RtAc86u),
       faults_(opt_.seed, opt_.faults)
 {
     const int sources = int(!opt_.scenarioFile.empty()) + int(opt_.scenario.has_value()) +
@@ -210,6 +233,18 @@ Emulator::Emulator(EmulatorOptions options)
     if (!(opt_.duration_s > 0)) throw std::invalid_argument("duration must be > 0 s");
     if (opt_.maxDatagrams == 0) throw std::invalid_argument("max datagrams must be > 0");
     speed_ = opt_.speed;
+    if (opt_.device == EmulatedDevice::RaspberryPi && opt_.format == NexmonHeaderVariant::UbiLocate)
+        throw std::invalid_argument("a Raspberry Pi sends nexmon or nexmon-legacy datagrams");
+    if (opt_.device == EmulatedDevice::Esp32)
+    {
+        if (!opt_.replayFile.empty())
+            throw std::invalid_argument("the ESP32 plays a scenario, not a Nexmon capture");
+        if (!opt_.preconfigured || opt_.preconfigured->bandwidthMHz != 20)
+            throw std::invalid_argument(
+                "the ESP32 needs the channel it listens on: --preconfigured CH (20 MHz)");
+    }
+    else if (!opt_.serialLink.empty())
+        throw std::invalid_argument("a serial link is for --device esp32");
 
     // Loopback check first: nothing else matters if the destination is not allowed.
     sender_ =
@@ -230,6 +265,20 @@ Emulator::Emulator(EmulatorOptions options)
     else
         source_ = std::make_unique<ScenarioSource>(
             opt_.scenario ? *opt_.scenario : sim::Scenario::fromYamlFile(opt_.scenarioFile));
+
+    if (opt_.device == EmulatedDevice::Esp32)
+        serial_ = std::make_unique<PtySerialPort>(opt_.serialLink);
+    if (!opt_.recordSentFile.empty())
+    {
+        if (serial_)
+        {
+            sentLines_ = std::make_unique<std::ofstream>(opt_.recordSentFile);
+            if (!*sentLines_)
+                throw std::runtime_error("cannot create '" + opt_.recordSentFile + "'");
+        }
+        else
+            sentPcap_ = std::make_unique<PcapWriter>(opt_.recordSentFile);
+    }
 
     router_.setScanProvider([this](WifiBand band) { return scan(band); });
     if (opt_.preconfigured) router_.preconfigure(*opt_.preconfigured, 0.0);
@@ -342,6 +391,21 @@ void Emulator::refreshCaptures(double now)
     if (!captures_.empty() && dynamic_cast<ScenarioSource*>(source_.get())) ++counters_.rewinds;
 }
 
+uint64_t Emulator::itemsSent() const
+{
+    return serial_ ? serialLinesQueued_ : sender_->datagramsSent();
+}
+
+void Emulator::flushSerial()
+{
+    if (!serial_) return;
+    serial_->flush(
+        [this](const std::string& line)
+        {
+            if (sentLines_) *sentLines_ << line << std::flush;
+        });
+}
+
 void Emulator::emit(std::vector<uint8_t>&& datagram, double t)
 {
     auto sink = [this](const std::vector<uint8_t>& d)
@@ -351,7 +415,9 @@ void Emulator::emit(std::vector<uint8_t>&& datagram, double t)
             ++counters_.datagramsOverLimit;
             return;
         }
-        sender_->send(d.data(), d.size());
+        if (sender_->send(d.data(), d.size()) && sentPcap_)
+            sentPcap_->writeUdp(
+                d.data(), d.size(), mrpt::Clock::now(), 0x7F000001, 0x7F000001, opt_.port);
     };
     if (t < 0)
         sink(datagram);  // a released datagram: already through the faults
@@ -394,13 +460,16 @@ void Emulator::processScenarioFrame(CObservationWiFiCSI& obs, double t)
         }
         lastCsiTime_[cap->interfaceName] = t;
     }
+    // The Pi's 43455c0 and the ESP32 have one antenna and report one stream.
+    const bool singleChain = opt_.device != EmulatedDevice::RtAc86u;
     uint8_t coresSent = 0, streamsSent = 0;
     for (unsigned tx = 0; tx < obs.nTx; ++tx)
         for (unsigned rx = 0; rx < obs.nRx; ++rx)
         {
             if (!obs.isPresent(tx, rx)) continue;
             const bool wanted = rx < nexmon::kMaxCores && tx < nexmon::kMaxStreams &&
-                                ((p.coreMask >> rx) & 1) && ((p.nssMask >> tx) & 1);
+                                ((p.coreMask >> rx) & 1) && ((p.nssMask >> tx) & 1) &&
+                                (!singleChain || (rx == 0 && tx == 0));
             if (!wanted)
             {
                 obs.setPresent(tx, rx, false);
@@ -415,12 +484,39 @@ void Emulator::processScenarioFrame(CObservationWiFiCSI& obs, double t)
         ++counters_.framesDroppedMasks;
         return;
     }
+    if (opt_.device == EmulatedDevice::Esp32)
+    {
+        ++counters_.framesEmitted;
+        if (serialLinesQueued_ >= opt_.maxDatagrams)
+        {
+            ++counters_.datagramsOverLimit;
+            return;
+        }
+        const auto us = uint64_t(std::max(0.0, t) * 1e6);
+        if (serial_->submit(esp32CsiLine(obs, uint32_t(counters_.framesEmitted), us)))
+            ++serialLinesQueued_;
+        ++counters_.datagramsGenerated;
+        flushSerial();
+        return;
+    }
+    if (opt_.device == EmulatedDevice::RaspberryPi)
+    {
+        // int16 words: scale so the largest component is 2^11, as the chip's AGC keeps it.
+        auto* h = obs.pair(0, 0);
+        float maxAbs = 0;
+        for (unsigned i = 0; i < obs.nfft(); ++i)
+            maxAbs = std::max({maxAbs, std::abs(h[i].real()), std::abs(h[i].imag())});
+        if (maxAbs > 0)
+            for (unsigned i = 0; i < obs.nfft(); ++i) h[i] *= 2048.0f / maxAbs;
+    }
     obs.headerVariant = opt_.format;
     // The firmware reports the radio's chanspec word (same channel; its sideband may differ
     // from the scenario's, e.g. 157/80 = 0xe29b vs 155/80 = 0xe09b).
     obs.chanspec = cap->chanspec;
     if (opt_.format == NexmonHeaderVariant::UbiLocate) obs.firmwareCounter = firmwareCounter_++;
-    auto datagrams = nexmon::encodeFrame(obs);
+    auto datagrams = nexmon::encodeFrame(
+        obs, opt_.device == EmulatedDevice::RaspberryPi ? nexmon::Chip::BCM43455c0
+                                                        : nexmon::Chip::BCM4366c0);
     ++counters_.framesEmitted;
     for (auto& d : datagrams)
     {
@@ -543,7 +639,7 @@ void Emulator::processDue(double now)
         if (due > now) break;
         counters_.maxLag_s = std::max(counters_.maxLag_s, now - due);
         source_->consume(*this);
-        if (sender_->datagramsSent() >= opt_.maxDatagrams) break;
+        if (itemsSent() >= opt_.maxDatagrams) break;
         refreshCaptures(now);  // a silence episode may have started
     }
     if (faults_.holding())
@@ -591,7 +687,7 @@ StopReason Emulator::run()
             stopReason_ = StopReason::Requested;
         else if (now >= opt_.duration_s)
             stopReason_ = StopReason::Duration;
-        else if (sender_->datagramsSent() >= opt_.maxDatagrams)
+        else if (itemsSent() >= opt_.maxDatagrams)
             stopReason_ = StopReason::MaxDatagrams;
         else if (source_->ended(simAt(now)))
         {
@@ -620,7 +716,12 @@ StopReason Emulator::run()
         fds.clear();
         fds.push_back({wakePipe_[0], POLLIN, 0});
         if (control_) control_->appendPollFds(fds);
-        const double wait = std::max(0.0, nextWakeup(now) - uptime_s());
+        // A serial line the terminal didn't take yet: retry soon (ptys don't poll POLLOUT
+        // reliably while no reader has the slave open).
+        const double wait = serial_ && serial_->pending()
+                                ? std::min(0.005, std::max(0.0, nextWakeup(now) - uptime_s()))
+                                : std::max(0.0, nextWakeup(now) - uptime_s());
+        flushSerial();
         timespec ts;
         ts.tv_sec = time_t(wait);
         ts.tv_nsec = long((wait - double(ts.tv_sec)) * 1e9);
@@ -637,6 +738,14 @@ StopReason Emulator::run()
         }
     }
     faults_.flush([this](const std::vector<uint8_t>& d) { emit(std::vector<uint8_t>(d), -1); });
+    // Lines still queued for the serial port: give the reader a moment (bounded) to take them.
+    for (const double until = uptime_s() + 1.0;
+         serial_ && serial_->pending() && uptime_s() < until;)
+    {
+        flushSerial();
+        if (serial_->pending()) ::usleep(5000);
+    }
+    if (sentPcap_) sentPcap_->close();
     // Answer the command that stopped us (emulator-ctl stop) before the socket goes away.
     const double drainUntil = uptime_s() + 0.5;
     while (control_ && control_->hasPendingAnswers() && uptime_s() < drainUntil)
@@ -796,7 +905,9 @@ std::string Emulator::statusJson() const
 {
     const double now = uptime_s();
     JsonObject em;
-    em.str("source", source_->kind())
+    em.str("device", toString(opt_.device))
+        .str("serial_port", serialDevice())
+        .str("source", source_->kind())
         .str("source_path", opt_.replayFile.empty() ? opt_.scenarioFile : opt_.replayFile)
         .str("scenario", scenario() ? scenario()->name : std::string())
         .str("format", toString(opt_.format))
@@ -838,6 +949,8 @@ std::string Emulator::statusJson() const
         .uint("reboots", c.reboots)
         .uint("rewinds", c.rewinds)
         .uint("odometry_sent", c.odometrySent)
+        .uint("serial_lines_written", serial_ ? serial_->linesWritten() : 0)
+        .uint("serial_lines_dropped", serial_ ? serial_->linesDropped() : 0)
         .num("max_lag_s", c.maxLag_s);
     JsonObject root;
     root.raw("emulator", em.json())

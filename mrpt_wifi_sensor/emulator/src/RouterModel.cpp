@@ -120,14 +120,30 @@ const char* toString(SilenceReason r)
     return "?";
 }
 
-RouterModel::RouterModel(RouterTiming timing) : timing_(timing)
+const char* toString(RouterKind k)
 {
+    return k == RouterKind::RaspberryPi ? "raspberry-pi" : "rt-ac86u";
+}
+
+RouterModel::RouterModel(RouterTiming timing, RouterKind kind) : timing_(timing), kind_(kind)
+{
+    if (kind_ == RouterKind::RaspberryPi) module_ = DriverModule::NexmonCsi;
     resetInterfaces(true);
 }
 
 void RouterModel::resetInterfaces(bool bridged)
 {
     interfaces_.clear();
+    if (kind_ == RouterKind::RaspberryPi)
+    {
+        WirelessInterface wlan0;
+        wlan0.name = "wlan0";
+        wlan0.band = WifiBand::Band5G;
+        wlan0.dualBand = true;
+        wlan0.chanspec = Chanspec::make(36, 20);
+        interfaces_ = {wlan0};
+        return;
+    }
     WirelessInterface eth5;
     eth5.name = "eth5";
     eth5.band = WifiBand::Band2G4;
@@ -157,7 +173,8 @@ const WirelessInterface* RouterModel::findInterface(const std::string& name) con
 
 void RouterModel::reboot(double now_s)
 {
-    module_ = DriverModule::Stock;
+    // The Pi's patched firmware is installed on its SD card: it comes back with every boot.
+    module_ = kind_ == RouterKind::RaspberryPi ? DriverModule::NexmonCsi : DriverModule::Stock;
     resetInterfaces(true);  // the stock setup bridges the radios
     bootDoneAt_s_ = now_s + timing_.rebootDuration_s;
     ++bootCount_;
@@ -168,15 +185,23 @@ void RouterModel::preconfigure(const Chanspec& cs, double now_s)
 {
     module_ = DriverModule::NexmonCsi;
     resetInterfaces(false);
-    WirelessInterface& itf = *mutableInterface(cs.band == WifiBand::Band5G ? "eth6" : "eth5");
+    WirelessInterface& itf = kind_ == RouterKind::RaspberryPi
+                                 ? interfaces_.front()
+                                 : *mutableInterface(cs.band == WifiBand::Band5G ? "eth6" : "eth5");
     itf.bridged = true;
     itf.monitor = true;
+    if (itf.dualBand)
+    {
+        itf.band = cs.band;
+        itf.monitorInterface = "mon0";
+        itf.monitorInterfaceUp = true;
+    }
     itf.chanspec = cs;
     CsiParams p;
     p.chanspecWord = cs.raw;
     p.collect = true;
-    p.coreMask = 0x0F;
-    p.nssMask = 0x0F;
+    p.coreMask = kind_ == RouterKind::RaspberryPi ? 0x01 : 0x0F;
+    p.nssMask = kind_ == RouterKind::RaspberryPi ? 0x01 : 0x0F;
     p.delay_us = kDefaultBusyDelay_us;
     itf.csi = p;
     bootDoneAt_s_ = std::min(bootDoneAt_s_, now_s);
@@ -241,7 +266,15 @@ ToolResult RouterModel::execute(const Argv& argv, double now_s)
     const std::string tool = baseName(argv[0]);
     const Argv args(argv.begin() + 1, argv.end());
     ToolResult r;
-    if (tool == "wl")
+    static const std::set<std::string> piTools = {"nexutil", "makecsiparams", "ifconfig", "ip",
+                                                  "iw",      "lsmod"};
+    if (kind_ == RouterKind::RaspberryPi && !piTools.count(tool))
+        r = ToolResult::failure("sh: " + tool + ": not found", 127);
+    else if (tool == "ip")
+        r = ip(args);
+    else if (tool == "iw")
+        r = iw(args);
+    else if (tool == "wl")
         r = wl(args, now_s);
     else if (tool == "nexutil")
         r = nexutil(args, now_s);
@@ -431,7 +464,8 @@ ToolResult RouterModel::nexutil(const Argv& args, double now_s)
         "  -s500 -b -l34 -v BASE64    set the CSI extraction parameters (makecsiparams)\n"
         "  -s505 -b -l LEN -v BASE64  inject a frame (transmitter / beacon mode)\n";
     ShortOptionParser opts(args, "hI:s:g:l:v:bi:r");
-    std::string ifname = kDefaultNexutilInterface, setCmd, getCmd, value, lenText;
+    std::string ifname = kind_ == RouterKind::RaspberryPi ? "wlan0" : kDefaultNexutilInterface,
+                setCmd, getCmd, value, lenText;
     bool base64 = false, integer = false;
     char o;
     std::string v;
@@ -530,8 +564,12 @@ ToolResult RouterModel::applyCsiParams(
     if (p.collect)
     {
         const auto cs = p.chanspec();
-        if (!cs || cs->band != itf.band)
+        // The Pi's 43455c0 does 20/40/80 MHz on 5 GHz, 20 MHz on 2.4 GHz (nexmon_csi).
+        const bool piOk = !cs || !itf.dualBand ||
+                          (cs->bandwidthMHz <= (cs->band == WifiBand::Band5G ? 80u : 20u));
+        if (!cs || (cs->band != itf.band && !itf.dualBand) || !piOk)
             return ToolResult::failure(bytesToFirmwareError("Bad Channel", "500"));
+        if (itf.dualBand) itf.band = cs->band;
         if (!p.coreMask || !p.nssMask)
             return ToolResult::failure(bytesToFirmwareError("Bad Argument", "500"));
         tune(itf, *cs, now_s);  // the firmware tunes the radio to the requested chanspec
@@ -626,21 +664,118 @@ ToolResult RouterModel::brctl(const Argv& args)
     return ToolResult::success();
 }
 
+WirelessInterface* RouterModel::interfaceOrMonitor(const std::string& name, bool* monitor)
+{
+    *monitor = false;
+    if (auto* itf = mutableInterface(name); itf && itf->present) return itf;
+    for (auto& itf : interfaces_)
+        if (itf.present && !itf.monitorInterface.empty() && itf.monitorInterface == name)
+        {
+            *monitor = true;
+            return &itf;
+        }
+    return nullptr;
+}
+
 ToolResult RouterModel::ifconfig(const Argv& args)
 {
     if (args.empty()) return ToolResult::failure("Usage: ifconfig IFACE [up|down]");
-    WirelessInterface* itf = mutableInterface(args[0]);
-    if (!itf || !itf->present)
+    bool monitor = false;
+    WirelessInterface* itf = interfaceOrMonitor(args[0], &monitor);
+    if (!itf)
         return ToolResult::failure(
             "ifconfig: " + args[0] + ": error fetching interface information: Device not found");
+    bool& up = monitor ? itf->monitorInterfaceUp : itf->up;
     if (args.size() == 1)
         return ToolResult::success(
-            itf->name + "      Link encap:Ethernet\n          " +
-            (itf->up ? "UP BROADCAST RUNNING MULTICAST" : "BROADCAST MULTICAST") + "\n");
+            args[0] + "      Link encap:Ethernet\n          " +
+            (up ? "UP BROADCAST RUNNING MULTICAST" : "BROADCAST MULTICAST") + "\n");
     if (args.size() != 2 || (args[1] != "up" && args[1] != "down"))
         return ToolResult::failure("ifconfig: emulated: only 'ifconfig IFACE up|down'");
-    itf->up = args[1] == "up";
+    up = args[1] == "up";
+    if (monitor) itf->monitor = itf->monitorInterfaceUp;
     return ToolResult::success();
+}
+
+ToolResult RouterModel::ip(const Argv& args)
+{
+    // iproute2's `ip link set DEV up|down` and `ip link show [DEV]`.
+    const char* usage = "Usage: ip link set DEV up|down | ip link show [DEV] (emulated)";
+    if (args.size() < 2 || (args[0] != "link" && args[0] != "l"))
+        return ToolResult::failure(usage, 255);
+    bool monitor = false;
+    if (args[1] == "show" && args.size() <= 3)
+    {
+        std::string out;
+        int index = 2;
+        for (const auto& itf : interfaces_)
+        {
+            if (!itf.present) continue;
+            const auto line = [&](const std::string& name, bool up, bool mon)
+            {
+                out += std::to_string(++index) + ": " + name + ": <BROADCAST,MULTICAST" +
+                       (up ? ",UP,LOWER_UP" : "") + "> mtu 1500 state " + (up ? "UP" : "DOWN") +
+                       "\n    link/" + (mon ? "ieee802.11/radiotap" : "ether") + "\n";
+            };
+            if (args.size() == 2 || args[2] == itf.name) line(itf.name, itf.up, false);
+            if (!itf.monitorInterface.empty() &&
+                (args.size() == 2 || args[2] == itf.monitorInterface))
+                line(itf.monitorInterface, itf.monitorInterfaceUp, true);
+        }
+        if (out.empty())
+            return ToolResult::failure("Device \"" + args[2] + "\" does not exist.", 1);
+        return ToolResult::success(out);
+    }
+    if (args[1] != "set" || args.size() != 4 || (args[3] != "up" && args[3] != "down"))
+        return ToolResult::failure(usage, 255);
+    WirelessInterface* itf = interfaceOrMonitor(args[2], &monitor);
+    if (!itf) return ToolResult::failure("Cannot find device \"" + args[2] + "\"", 1);
+    (monitor ? itf->monitorInterfaceUp : itf->up) = args[3] == "up";
+    if (monitor) itf->monitor = itf->monitorInterfaceUp;
+    return ToolResult::success();
+}
+
+ToolResult RouterModel::iw(const Argv& args)
+{
+    // `iw dev` (list), `iw dev DEV interface add NAME type monitor`, `iw dev NAME del`.
+    const char* usage =
+        "Usage: iw dev | iw dev DEV interface add NAME type monitor | iw dev NAME del (emulated)";
+    if (args.empty() || args[0] != "dev") return ToolResult::failure(usage, 1);
+    if (args.size() == 1)
+    {
+        std::string out = "phy#0\n";
+        for (const auto& itf : interfaces_)
+        {
+            if (!itf.present) continue;
+            if (!itf.monitorInterface.empty())
+                out += "\tInterface " + itf.monitorInterface + "\n\t\ttype monitor\n";
+            out += "\tInterface " + itf.name + "\n\t\ttype managed\n\t\tchannel " +
+                   std::to_string(itf.chanspec.controlChannel()) +
+                   ", width: " + std::to_string(itf.chanspec.bandwidthMHz) + " MHz\n";
+        }
+        return ToolResult::success(out);
+    }
+    bool monitor = false;
+    WirelessInterface* itf = interfaceOrMonitor(args[1], &monitor);
+    if (!itf) return ToolResult::failure("command failed: No such device (-19)", 237);
+    if (args.size() == 3 && args[2] == "del" && monitor)
+    {
+        itf->monitorInterface.clear();
+        itf->monitorInterfaceUp = itf->monitor = false;
+        return ToolResult::success();
+    }
+    if (args.size() == 7 && !monitor && args[2] == "interface" && args[3] == "add" &&
+        args[5] == "type" && args[6] == "monitor")
+    {
+        const std::string& name = args[4];
+        if (name.empty() || name.size() > 15 || mutableInterface(name) ||
+            !itf->monitorInterface.empty())
+            return ToolResult::failure("command failed: Too many open files in system (-23)", 233);
+        itf->monitorInterface = name;
+        itf->monitorInterfaceUp = itf->monitor = false;  // created down, as the kernel does
+        return ToolResult::success();
+    }
+    return ToolResult::failure(usage, 1);
 }
 
 // ---------------------------------------------------------------------------------- status
@@ -657,6 +792,7 @@ std::string RouterModel::toJson(double now_s) const
             .boolean("radio_on", itf.radioOn)
             .boolean("monitor", itf.monitor)
             .boolean("bridged", itf.bridged)
+            .str("monitor_interface", itf.monitorInterface)
             .str("chanspec", itf.chanspec.asString())
             .str("chanspec_word", hex16(itf.chanspec.raw));
         if (itf.csi)
@@ -687,7 +823,8 @@ std::string RouterModel::toJson(double now_s) const
         itfs.push_back(j.json());
     }
     JsonObject r;
-    r.uint("boot", bootCount_)
+    r.str("device", toString(kind_))
+        .uint("boot", bootCount_)
         .boolean("rebooting", rebooting(now_s))
         .str("module", toString(module_))
         .uint("commands", commandsExecuted_)

@@ -117,15 +117,22 @@ void decodeWords(const uint8_t* words, unsigned nfft, std::complex<float>* out);
 void decodeWords(Chip chip, const uint8_t* words, unsigned nfft, std::complex<float>* out);
 
 /** Encodes one datagram from CSI in subcarrier order (nfft = h.nfft() values). `out` is
- * resized to datagramSize(h.variant, nfft); the UbiLocate trailer is zero. */
+ * resized to datagramSize(h.variant, nfft); the UbiLocate trailer is zero. The words follow
+ * `h.chip`: 4366c0 packed floats, or int16 I/Q (43455c0, 4339: values rounded and saturated,
+ * so scale them first). Throws std::invalid_argument for the 4358 (decode only). */
 void encodeDatagram(
     const DatagramHeader& h, const std::complex<float>* subcarrierOrder, std::vector<uint8_t>& out);
 
-/** Header of the datagram carrying pair (tx, rx) of an observation. */
-DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned rx);
+/** The chip word nexmon_csi puts in the header of `c`'s datagrams. */
+uint16_t chipWord(Chip c);
 
-/** Every datagram of a frame as the router sends them: one per present (core, stream), core
+/** Header of the datagram carrying pair (tx, rx) of an observation, as `chip` sends it. */
+DatagramHeader headerFor(
+    const CObservationWiFiCSI& obs, unsigned tx, unsigned rx, Chip chip = Chip::BCM4366c0);
+
+/** Every datagram of a frame as the chip sends them: one per present (core, stream), core
  * by core, streams within a core (the order of the real captures). */
-std::vector<std::vector<uint8_t>> encodeFrame(const CObservationWiFiCSI& obs);
+std::vector<std::vector<uint8_t>> encodeFrame(
+    const CObservationWiFiCSI& obs, Chip chip = Chip::BCM4366c0);
 
 }  // namespace mrpt_wifi::nexmon

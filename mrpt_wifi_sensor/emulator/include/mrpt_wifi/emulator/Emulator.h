@@ -7,12 +7,15 @@
 #include <mrpt_wifi/emulator/FaultInjector.h>
 #include <mrpt_wifi/emulator/LoopbackUdp.h>
 #include <mrpt_wifi/emulator/RouterModel.h>
+#include <mrpt_wifi/emulator/SerialPty.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sim/Scenario.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <optional>
@@ -22,9 +25,28 @@
 
 namespace mrpt_wifi::emulator
 {
+/** The device the emulator plays. */
+enum class EmulatedDevice : uint8_t
+{
+    RtAc86u = 0,  //!< BCM4366c0 packed-float datagrams over UDP, router tools (wl, nexutil, ...)
+    RaspberryPi,  //!< BCM43455c0 int16 datagrams (one core) over UDP, Pi tools (nexutil, ip, iw)
+    Esp32         //!< esp-csi CSI_DATA lines on a pseudo-terminal (serial port), 20 MHz L-LTF
+};
+const char* toString(EmulatedDevice d);
+/** Parses "rt-ac86u|raspberry-pi|esp32"; throws std::invalid_argument otherwise. */
+EmulatedDevice emulatedDeviceFromString(const std::string& s);
+
 /** Everything the emulator needs; rt-ac86u-emulator fills it from its command line. */
 struct EmulatorOptions
 {
+    EmulatedDevice device = EmulatedDevice::RtAc86u;
+    /** Esp32: a symbolic link to the pseudo-terminal's slave, for a fixed path in a .ini
+     * (empty: only the /dev/pts/N name, printed and in the status JSON). */
+    std::string serialLink;
+    /** Everything actually sent, for comparison with what a receiver decoded: a pcap of the
+     * datagrams (UDP devices) or the CSI_DATA lines completely written (Esp32). Empty: none. */
+    std::string recordSentFile;
+
     /** @name Source: exactly one of a scenario (file or in code) or a capture to replay.
      * @{ */
     std::string scenarioFile;
@@ -146,6 +168,10 @@ public:
     const FaultCounters& faultCounters() const { return faults_.counters(); }
     uint64_t datagramsSent() const { return sender_->datagramsSent(); }
     const LoopbackDestination& destination() const { return sender_->destination(); }
+    /** Esp32: the path a reader opens (the link, else /dev/pts/N); empty for other devices. */
+    std::string serialDevice() const { return serial_ ? serial_->devicePath() : std::string(); }
+    /** Datagrams sent (UDP devices) or CSI lines queued (Esp32): what maxDatagrams bounds. */
+    uint64_t itemsSent() const;
     std::string socketPath() const;
     std::string binDir() const;
     StopReason stopReason() const { return stopReason_; }
@@ -186,6 +212,11 @@ private:
     std::unique_ptr<LoopbackUdpSender> odometrySender_;  //!< odometryPort != 0
     size_t nextOdometry_ = 0;
     std::unique_ptr<ControlServer> control_;
+    std::unique_ptr<PtySerialPort> serial_;  //!< Esp32
+    uint64_t serialLinesQueued_ = 0;
+    std::unique_ptr<PcapWriter> sentPcap_;      //!< recordSentFile, UDP devices
+    std::unique_ptr<std::ofstream> sentLines_;  //!< recordSentFile, Esp32
+    void flushSerial();
     std::unique_ptr<Source> source_;
     DataPlaneCounters counters_;
 

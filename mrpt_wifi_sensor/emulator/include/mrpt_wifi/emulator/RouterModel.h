@@ -24,6 +24,14 @@ enum class DriverModule : uint8_t
 };
 const char* toString(DriverModule m);
 
+/** The device the model plays. */
+enum class RouterKind : uint8_t
+{
+    RtAc86u = 0,  //!< Asus RT-AC86U (BCM4366c0), stock dhd until the Nexmon module is loaded
+    RaspberryPi   //!< Raspberry Pi 3B+/4 (BCM43455c0) with the Nexmon CSI firmware installed
+};
+const char* toString(RouterKind k);
+
 /** One access point as `wl scanresults` reports it. */
 struct ScanEntry
 {
@@ -58,8 +66,12 @@ struct WirelessInterface
     bool present = true;  //!< false while the driver module is unloaded
     bool up = true;
     bool radioOn = true;
-    bool monitor = false;
-    bool bridged = true;  //!< member of br0: CSI datagrams only reach the LAN through it
+    bool monitor = false;  //!< router: `wl monitor 1`; Pi: its monitor interface exists, up
+    bool bridged = true;
+    bool dualBand = false;         //!< Pi's wlan0: the CSI parameters pick the band
+    std::string monitorInterface;  //!< Pi: `iw dev wlan0 interface add NAME type monitor`
+    bool monitorInterfaceUp =
+        false;  //!< member of br0: CSI datagrams only reach the LAN through it
     std::string country = "US";
     std::string rate5G = "auto", rate2G4 = "auto";  //!< `wl 5g_rate` / `wl 2g_rate` settings
     Chanspec chanspec;
@@ -102,6 +114,12 @@ struct ActiveCapture
 /** The router's state machine and its command-line tools, without any I/O: commands are
  * argv vectors, time is seconds on the emulator's wall clock.
  *
+ * RouterKind::RaspberryPi plays a Pi with nexmon_csi instead: one dual-band `wlan0` (the
+ * patched firmware is always loaded), the tools `nexutil`, `makecsiparams`, `ifconfig`, `ip`
+ * (`ip link set|show`) and `iw` (`iw dev wlan0 interface add mon0 type monitor`, `iw dev mon0
+ * del`); CSI flows once wlan0 is up, `nexutil -s500` set the parameters (which also tune the
+ * radio) and the monitor interface is up.
+ *
  * After a (re)boot the stock module is loaded and CSI is silent. WiROS's one-time setup
  * (`rmmod dhd; insmod <path>/dhd.ko; brctl addif br0 eth6`) and a configuration
  * (`wl -i eth6 chanspec CH/BW`, `wl -i eth6 monitor 1`, `nexutil -I eth6 -s500 -b -l34 -v …`)
@@ -111,7 +129,8 @@ class RouterModel
 public:
     using ScanProvider = std::function<std::vector<ScanEntry>(WifiBand band)>;
 
-    explicit RouterModel(RouterTiming timing = {});
+    explicit RouterModel(RouterTiming timing = {}, RouterKind kind = RouterKind::RtAc86u);
+    RouterKind kind() const { return kind_; }
 
     /** Source of `wl scan` results (the emulator asks its simulator). */
     void setScanProvider(ScanProvider p) { scanProvider_ = std::move(p); }
@@ -159,6 +178,10 @@ private:
     ToolResult lsmod(const Argv& args) const;
     ToolResult brctl(const Argv& args);
     ToolResult ifconfig(const Argv& args);
+    ToolResult ip(const Argv& args);
+    ToolResult iw(const Argv& args);
+    /** The interface named `name`, or the one whose monitor interface it is (`*monitor`). */
+    WirelessInterface* interfaceOrMonitor(const std::string& name, bool* monitor);
     ToolResult applyCsiParams(
         WirelessInterface& itf, const std::vector<uint8_t>& bytes, double now_s);
     void tune(WirelessInterface& itf, const Chanspec& cs, double now_s);
@@ -166,6 +189,7 @@ private:
     void resetInterfaces(bool bridged);
 
     RouterTiming timing_;
+    RouterKind kind_ = RouterKind::RtAc86u;
     ScanProvider scanProvider_;
     DriverModule module_ = DriverModule::Stock;
     std::vector<WirelessInterface> interfaces_;
