@@ -115,6 +115,40 @@ void CWiFiCSISensor::initialize()
     }
     m_state = ssWorking;
 
+    if (s.piControl != CsiSensorSettings::PiControl::Off)
+    {
+        std::shared_ptr<CommandRunner> runner;
+        if (s.piControl == CsiSensorSettings::PiControl::Local)
+            runner = std::make_shared<LocalCommandRunner>(s.pi.toolDir);
+        else
+            runner = std::make_shared<ShellCommandRunner>(
+                std::make_shared<SshRouterShell>(s.ssh), s.pi.toolDir);
+        pi_ = std::make_unique<NexmonPiControl>(runner, s.pi);
+        worker_ = std::thread([this] { workerLoop(); });
+        MRPT_LOG_INFO_STREAM(
+            "[" << m_sensorLabel << "] configuring the Raspberry Pi's Nexmon CSI on "
+                << pi_->describe() << ": " << s.extraction.chanspec.asString() << ", interface "
+                << s.pi.interface);
+        switchTarget_ = s.extraction.chanspec;
+        switchRequested_ = mrpt::Clock::now();
+        postJob(
+            [this, extraction = s.extraction]
+            {
+                pi_->configure(extraction);
+                postEvent(
+                    [this, cs = extraction.chanspec]
+                    {
+                        {
+                            std::lock_guard<std::mutex> lk(mutex_);
+                            configured_ = cs;
+                        }
+                        MRPT_LOG_INFO_STREAM(
+                            "[" << m_sensorLabel << "] Raspberry Pi configured: CSI on "
+                                << cs.asString());
+                    });
+            });
+        return;
+    }
     if (!s.routerControl)
     {
         // Listening only; the host's own card may still scan for the record.
@@ -234,7 +268,8 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
                                [&](const MacPattern& p) { return p.matches(frame->transmitter); });
         // The hardware filter matches only two bytes: the software filter finishes the job.
         const bool hwMacOk =
-            s.extraction.macFilter.empty() || !s.routerControl ||
+            s.extraction.macFilter.empty() ||
+            (!s.routerControl && s.piControl == CsiSensorSettings::PiControl::Off) ||
             std::count(
                 s.extraction.macFilter.begin(), s.extraction.macFilter.end(), frame->transmitter);
         if (!macOk || !hwMacOk)

@@ -45,6 +45,8 @@ const std::set<std::string>& knownKeys()
         "login_connect_timeout", "ssh_persistent_session", "command_timeout", "setup_load_module",
         "setup_module_path", "setup_bridge", "setup_interface_5g", "setup_interface_2g4", "channel",
         "packet_mac_filter", "packet_delay", "packet_first_byte",
+        // Raspberry Pi control (NexmonPiControl)
+        "pi_control", "pi_interface", "pi_monitor_interface", "pi_tool_dir",
         // transmitter mode
         "transmitter_mode", "transmitter_mac", "transmitter_rate_hz", "transmitter_streams",
         "transmitter_count",
@@ -149,9 +151,20 @@ CsiSensorSettings loadCsiSensorSettings(
         s.assembler.overwrittenBins =
             overwrittenBinPolicyFromString(str("overwritten_bins", "repair"));
         s.assembler.frameTimeout_s = c.read_double(section, "frame_timeout", 0.1);
-        s.assembler.coreMask = uint8_t(parseUnsigned(str("core_mask", "0xf"), "core_mask", 0xF));
+        const std::string piControl = str("pi_control", "off");
+        if (piControl == "local")
+            s.piControl = CsiSensorSettings::PiControl::Local;
+        else if (piControl == "ssh")
+            s.piControl = CsiSensorSettings::PiControl::Ssh;
+        else if (piControl != "off")
+            throw std::invalid_argument(
+                "key 'pi_control': '" + piControl + "' (expected off, local or ssh)");
+        // The Pi's bcm43455c0 has one core and reports one stream.
+        const char* maskDefault = s.piControl != CsiSensorSettings::PiControl::Off ? "0x1" : "0xf";
+        s.assembler.coreMask =
+            uint8_t(parseUnsigned(str("core_mask", maskDefault), "core_mask", 0xF));
         s.assembler.streamMask =
-            uint8_t(parseUnsigned(str("stream_mask", "0xf"), "stream_mask", 0xF));
+            uint8_t(parseUnsigned(str("stream_mask", maskDefault), "stream_mask", 0xF));
         s.statusPeriod_s = c.read_double(section, "status_period", 10.0);
         s.abortOnError = c.read_bool(section, "abort_on_error", false);
 
@@ -174,7 +187,14 @@ CsiSensorSettings loadCsiSensorSettings(
         s.setup.interface2G4 = str("setup_interface_2g4", s.setup.interface2G4);
         s.setup.scanWait_s = c.read_double(section, "scan_wait", 3.0);
         s.setup.validate();
-        s.extraction.chanspec = Chanspec::fromString(str("channel", "157/80"));
+        try
+        {
+            s.extraction.chanspec = Chanspec::fromString(str("channel", "157/80"));
+        }
+        catch (const std::invalid_argument& e)
+        {
+            throw std::invalid_argument(std::string("key 'channel': ") + e.what());
+        }
         s.extraction.coreMask = s.assembler.coreMask;
         s.extraction.streamMask = s.assembler.streamMask;
         s.extraction.macFilter.clear();
@@ -187,6 +207,24 @@ CsiSensorSettings loadCsiSensorSettings(
             uint16_t(parseUnsigned(str("packet_delay", "0"), "packet_delay", 0xFFFF));
         if (const auto b = str("packet_first_byte", ""); !b.empty())
             s.extraction.firstPacketByte = uint8_t(parseUnsigned(b, "packet_first_byte", 0xFF));
+
+        if (s.piControl != CsiSensorSettings::PiControl::Off)
+        {
+            if (s.routerControl)
+                throw std::invalid_argument(
+                    "router_control and pi_control both set: one device configures the capture");
+            s.pi.interface = str("pi_interface", s.pi.interface);
+            s.pi.monitorInterface = str("pi_monitor_interface", s.pi.monitorInterface);
+            s.pi.toolDir = str("pi_tool_dir", "");
+            s.pi.commandTimeout_s = s.setup.commandTimeout_s;
+            s.pi.validate();
+            validatePiExtraction(s.extraction);
+        }
+        else
+            for (const char* k : {"pi_interface", "pi_monitor_interface", "pi_tool_dir"})
+                if (!str(k, "").empty())
+                    throw std::invalid_argument(
+                        std::string("key '") + k + "' needs pi_control = local or ssh");
 
         s.transmitterMode = c.read_bool(section, "transmitter_mode", false);
         if (const auto m = str("transmitter_mac", ""); !m.empty())

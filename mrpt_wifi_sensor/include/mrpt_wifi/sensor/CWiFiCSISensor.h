@@ -7,6 +7,7 @@
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
 #include <mrpt_wifi/sensor/CsiLiveSource.h>
 #include <mrpt_wifi/sensor/CsiSensorSettings.h>
+#include <mrpt_wifi/sensor/NexmonPiControl.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 
 #include <condition_variable>
@@ -35,7 +36,8 @@ class BearingProcessor;
  * the kernel arrival time of their first datagram.
  * Control path (optional): the router is configured over ssh (firmware module, chanspec,
  * monitor mode, makecsiparams + nexutil), scanned for access points, switched between
- * channels, and put in transmitter mode — in a worker thread, so capture never stalls.
+ * channels, and put in transmitter mode — in a worker thread, so capture never stalls. Or
+ * (`pi_control`) a Raspberry Pi's own chip is configured, here or over ssh (NexmonPiControl).
  *
  * See the .ini files in share/rawlog-grabber/ for every configuration key. Unknown keys are an
  * error. Registered as `driver = CWiFiCSISensor` by libmrpt_wifi_sensor.so. */
@@ -105,6 +107,7 @@ private:
 
     // Control path: one worker thread runs router jobs in order; results come back as events.
     std::unique_ptr<NexmonRouterControl> router_;
+    std::unique_ptr<NexmonPiControl> pi_;  //!< pi_control = local / ssh
     std::thread worker_;
     std::deque<std::function<void()>> jobs_;
     std::deque<std::function<void()>> events_;  //!< run on the sensor thread

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/sensor/AccessPointSelector.h>
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
 #include <mrpt_wifi/sensor/LiveBearingWorker.h>
+#include <mrpt_wifi/sensor/NexmonPiControl.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 #include <mrpt_wifi/sensor/UdpCsiReceiver.h>
 
@@ -41,6 +42,17 @@ struct CsiSensorSettings
     RouterSetupOptions setup;
     bool loadModule = true;
     CsiExtractionSettings extraction;
+
+    /** `pi_control`: Nexmon CSI on a Raspberry Pi's own chip, configured with the same
+     *  `channel` / `packet_*` / mask keys, here (Local) or over ssh (`login_*` keys). */
+    enum class PiControl
+    {
+        Off,
+        Local,
+        Ssh
+    };
+    PiControl piControl = PiControl::Off;
+    PiSetupOptions pi;
 
     bool transmitterMode = false;
     TransmitterSettings transmitter;
