@@ -110,6 +110,18 @@ void PiSetupOptions::validate() const
 void validatePiExtraction(const CsiExtractionSettings& s)
 {
     const Chanspec& cs = s.chanspec;
+    // A channel of the 5 GHz plan up to 165 (the 43455c0's) whose 20/40/80 MHz block exists:
+    // 36/80 yes, 50/80 and 165/80 (169..177, U-NII-4) no.
+    const unsigned control = cs.controlChannel();
+    const bool in5GPlan = (control >= 36 && control <= 64) || (control >= 100 && control <= 144) ||
+                          (control >= 149 && control <= 165);
+    const auto block = Chanspec::fromControlChannel(control, cs.bandwidthMHz);
+    if (cs.band == WifiBand::Band5G && (!in5GPlan || control % 4 != (control >= 149 ? 1u : 0u) ||
+                                        !block || block->centerChannel != cs.centerChannel ||
+                                        cs.centerChannel + 2 * (cs.bandwidthMHz / 20 - 1) > 165))
+        throw std::invalid_argument(
+            "key 'channel': " + cs.asString() + " is not a 5 GHz channel of " +
+            std::to_string(cs.bandwidthMHz) + " MHz (e.g. 36/20, 38/40, 42/80, 155/80)");
     const unsigned maxBw = cs.band == WifiBand::Band5G ? 80 : 20;
     if (cs.bandwidthMHz > maxBw)
         throw std::invalid_argument(

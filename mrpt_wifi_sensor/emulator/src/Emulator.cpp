@@ -738,12 +738,13 @@ StopReason Emulator::run()
         }
     }
     faults_.flush([this](const std::vector<uint8_t>& d) { emit(std::vector<uint8_t>(d), -1); });
-    // Lines still queued for the serial port: give the reader a moment (bounded) to take them.
-    for (const double until = uptime_s() + 1.0;
-         serial_ && serial_->pending() && uptime_s() < until;)
+    // Lines not yet read from the serial port vanish when it closes: give the reader a moment
+    // (bounded) to take them.
+    for (const double until = uptime_s() + 2.0;
+         serial_ && (serial_->pending() || serial_->unreadBytes()) && uptime_s() < until;)
     {
         flushSerial();
-        if (serial_->pending()) ::usleep(5000);
+        ::usleep(5000);
     }
     if (sentPcap_) sentPcap_->close();
     // Answer the command that stopped us (emulator-ctl stop) before the socket goes away.

@@ -3,6 +3,7 @@
 #include <mrpt/core/format.h>
 #include <mrpt_wifi/emulator/SerialPty.h>
 #include <pty.h>
+#include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -84,6 +85,12 @@ void PtySerialPort::flush(const std::function<void(const std::string&)>& onWritt
         queue_.pop_front();
         offset_ = 0;
     }
+}
+
+size_t PtySerialPort::unreadBytes() const
+{
+    int n = 0;
+    return ::ioctl(slave_, FIONREAD, &n) == 0 && n > 0 ? size_t(n) : 0;
 }
 
 std::string esp32CsiLine(

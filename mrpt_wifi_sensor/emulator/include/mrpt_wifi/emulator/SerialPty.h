@@ -38,6 +38,8 @@ public:
     /** Writes what the terminal takes now; each line completely written goes to `onWritten`. */
     void flush(const std::function<void(const std::string&)>& onWritten);
     bool pending() const { return !queue_.empty(); }
+    /** Bytes written but not read yet by the reader of the slave (lost if the port closes). */
+    size_t unreadBytes() const;
 
     uint64_t linesWritten() const { return linesWritten_; }
     uint64_t linesDropped() const { return linesDropped_; }
