@@ -107,6 +107,11 @@ int main(int argc, char** argv)
                 ini = std::make_unique<mrpt::config::CConfigFileMemory>(
                     "[" + section + "]\nrouter_control = true\n");
             auto s = loadCsiSensorSettings(*ini, section, section);
+            if (s.piControl != CsiSensorSettings::PiControl::Off)
+                throw std::invalid_argument(
+                    "section '" + section +
+                    "' configures a Raspberry Pi (pi_control), which the sensor sets up at "
+                    "start-up; csi-router drives an RT-AC86U");
             if (argHost.isSet()) s.ssh.host = argHost.getValue();
             if (argPort.isSet()) s.ssh.port = argPort.getValue();
             if (argUser.isSet()) s.ssh.user = argUser.getValue();

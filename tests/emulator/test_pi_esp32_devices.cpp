@@ -3,6 +3,7 @@
 // decoders the sensor uses.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <mrpt_wifi/emulator/Emulator.h>
 #include <mrpt_wifi/emulator/RouterModel.h>
 #include <mrpt_wifi/emulator/SerialPty.h>
 #include <mrpt_wifi/sensor/Esp32CsiFormat.h>
@@ -11,6 +12,8 @@
 
 #include <filesystem>
 #include <random>
+
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::emulator;
@@ -173,7 +176,9 @@ TEST(EmulatorEsp32, PseudoTerminalDeliversQueuedLinesToAReaderWhoComesLater)
         port.flush([&](const std::string& l) { written.push_back(l); });
         EXPECT_EQ(written.size(), 5u);
         EXPECT_FALSE(port.pending());
-        EXPECT_EQ(port.unreadBytes(), 35u);  // nobody has read them yet
+        // Nobody has read them yet (the terminal moves them to the reader's side shortly).
+        for (int i = 0; i < 100 && port.unreadBytes() < 35; ++i) ::usleep(2000);
+        EXPECT_EQ(port.unreadBytes(), 35u);
         const int fd = ::open(link.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
         ASSERT_GE(fd, 0);
         char buf[256];
@@ -186,4 +191,40 @@ TEST(EmulatorEsp32, PseudoTerminalDeliversQueuedLinesToAReaderWhoComesLater)
     EXPECT_EQ(got, "line 0\nline 1\nline 2\nline 3\nline 4\n");
     EXPECT_FALSE(std::filesystem::exists(link));  // the link goes with the port
     ::rmdir(dirTemplate);
+}
+
+TEST(EmulatorDevices, ImpossibleDeviceSettingsAreRefusedBeforeAnythingIsSent)
+{
+    const auto options = [](EmulatedDevice d)
+    {
+        EmulatorOptions o;
+        o.device = d;
+        o.scenarioFile = test::sourceDir() + "/share/scenarios/iot.yaml";
+        o.port = 9;  // nothing is sent: the constructor refuses first
+        return o;
+    };
+    const auto refused = [](const EmulatorOptions& o, const std::string& what)
+    {
+        try
+        {
+            Emulator e(o);
+            ADD_FAILURE() << "accepted; expected: " << what;
+        }
+        catch (const std::exception& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    refused(options(EmulatedDevice::Esp32), "--preconfigured");
+    auto o = options(EmulatedDevice::Esp32);
+    o.preconfigured = Chanspec::fromString("155/80");
+    refused(o, "20 MHz");
+    o = options(EmulatedDevice::RaspberryPi);
+    o.format = NexmonHeaderVariant::UbiLocate;
+    refused(o, "Raspberry Pi");
+    o = options(EmulatedDevice::RtAc86u);
+    o.serialLink = "/tmp/x";
+    refused(o, "esp32");
+    EXPECT_THROW(emulatedDeviceFromString("pi"), std::invalid_argument);
+    EXPECT_EQ(emulatedDeviceFromString("raspberry-pi"), EmulatedDevice::RaspberryPi);
 }

@@ -92,7 +92,10 @@ int main(int argc, char** argv)
                 "Emulates an Asus RT-AC86U with Nexmon CSI firmware on loopback: sends Nexmon "
                 "CSI datagrams from a simulated scenario (or a replayed capture) to "
                 "127.0.0.1:PORT and obeys the router tools wl, nexutil, makecsiparams, insmod, "
-                "rmmod, brctl run through STATE_DIR/bin/ (e.g. by an sshd). Loopback only.",
+                "rmmod, brctl run through STATE_DIR/bin/ (e.g. by an sshd). With --device it plays "
+                "a "
+                "Raspberry Pi's nexmon_csi instead (tools nexutil, makecsiparams, ip, iw) or an "
+                "ESP32 writing esp-csi lines to a pseudo-terminal. Loopback only.",
                 ' ', "0.1");
             TCLAP::ValueArg<std::string> argDevice(
                 "", "device",

@@ -739,12 +739,22 @@ StopReason Emulator::run()
     }
     faults_.flush([this](const std::vector<uint8_t>& d) { emit(std::vector<uint8_t>(d), -1); });
     // Lines not yet read from the serial port vanish when it closes: give the reader a moment
-    // (bounded) to take them.
-    for (const double until = uptime_s() + 2.0;
-         serial_ && (serial_->pending() || serial_->unreadBytes()) && uptime_s() < until;)
+    // (bounded) to take them. The terminal moves written bytes to the reader's buffer
+    // asynchronously, so "nothing unread" must hold for a while.
+    if (serial_)
     {
-        flushSerial();
-        ::usleep(5000);
+        double drainedSince = -1;
+        for (const double until = uptime_s() + 2.0; uptime_s() < until; ::usleep(5000))
+        {
+            flushSerial();
+            const double t = uptime_s();
+            if (serial_->pending() || serial_->unreadBytes())
+                drainedSince = -1;
+            else if (drainedSince < 0)
+                drainedSince = t;
+            else if (t - drainedSince >= 0.05)
+                break;
+        }
     }
     if (sentPcap_) sentPcap_->close();
     // Answer the command that stopped us (emulator-ctl stop) before the socket goes away.
