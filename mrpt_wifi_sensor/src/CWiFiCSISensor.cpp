@@ -125,10 +125,15 @@ void CWiFiCSISensor::initialize()
                 std::make_shared<SshRouterShell>(s.ssh), s.pi.toolDir);
         pi_ = std::make_unique<NexmonPiControl>(runner, s.pi);
         worker_ = std::thread([this] { workerLoop(); });
+        std::string steps;
+        for (const auto& argv : pi_->configureCommands(s.extraction))
+        {
+            steps += steps.empty() ? "" : "; ";
+            for (size_t i = 0; i < argv.size(); ++i) steps += (i ? " " : "") + argv[i];
+        }
         MRPT_LOG_INFO_STREAM(
             "[" << m_sensorLabel << "] configuring the Raspberry Pi's Nexmon CSI on "
-                << pi_->describe() << ": " << s.extraction.chanspec.asString() << ", interface "
-                << s.pi.interface);
+                << pi_->describe() << ": " << steps);
         switchTarget_ = s.extraction.chanspec;
         switchRequested_ = mrpt::Clock::now();
         postJob(

@@ -154,6 +154,46 @@ TEST(GrabberPi, LocalControlConfiguresThePiAndItsCsiIsCapturedOnLoopback)
     expectSentFramesRecorded(rec.frames, sent);
 }
 
+TEST(GrabberPi, RealBcm43455c0CaptureReplayedByTheConfiguredPiIsRecordedUnchanged)
+{
+    std::string why;
+    if (!liveCaptureOnLoopback(why))
+        GTEST_SKIP() << "no libpcap live capture on lo here (needs CAP_NET_RAW): " << why;
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    const std::string sample = test::sourceDir() + "/tests/data/nexmon/bcm43455c0-80mhz.pcap";
+    // The Pi replays CSIKit's real 43455c0 capture (8 frames on 42/80, 3.5 s, here at 4x),
+    // round and round, but only once the sensor has tuned it there; 16 datagrams, then it stops.
+    test::EmulatorProcess emu(
+        {"--device", "raspberry-pi", "--replay", sample, "--speed", "4", "--loop", "--record-sent",
+         tmp.file("sent.pcap"), "--max-datagrams", "16"},
+        port, 30);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    const auto ini = test::deriveGrabberIni(
+        "csi_raspberry_pi.ini",
+        {{"source", "interface:lo"},
+         {"udp_port", std::to_string(port)},
+         {"pi_tool_dir", emu.toolsDir()},
+         {"channel", "42/80"},
+         {"min_rssi_dBm", "-128"},
+         {"status_period", "1"},
+         {"rawlog_prefix", "replay"}},
+        tmp.file("replay.ini"));
+    const auto rec = test::runGrabber(tmp, ini, 5.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    const auto sent = decodeSent(tmp.file("sent.pcap"), port);
+    ASSERT_EQ(sent.size(), 16u) << emu.log();
+    expectSentFramesRecorded(rec.frames, sent);
+    // What went out are the capture's own frames, bytes unchanged: every one of the 8 appears.
+    const auto original = decodeSent(sample, 5500);
+    ASSERT_EQ(original.size(), 8u);
+    std::set<size_t> seen;
+    for (const auto& f : sent)
+        for (size_t k = 0; k < original.size(); ++k)
+            if (original[k]->csi == f->csi && original[k]->rssi_dBm == f->rssi_dBm) seen.insert(k);
+    EXPECT_EQ(seen.size(), 8u);
+}
+
 TEST(GrabberPi, SshControlOfThePiAndAChannelItCannotDoIsNamed)
 {
     std::string why;

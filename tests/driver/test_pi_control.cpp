@@ -78,6 +78,12 @@ TEST(PiControl, RunsNexmonCsiSetupStepsAsProgramsWithArguments)
     EXPECT_EQ(
         runner->calls[4], (V{"iw", "dev", "wlan0", "interface", "add", "mon0", "type", "monitor"}));
     EXPECT_EQ(runner->calls[5], (V{"ip", "link", "set", "mon0", "up"}));
+    // What the log shows: the same programs, the parameters as a placeholder.
+    const auto shown = pi.configureCommands(s);
+    ASSERT_EQ(shown.size(), 5u);
+    EXPECT_EQ(shown[1], runner->calls[1]);
+    EXPECT_EQ(shown[2].back(), "-v<params>");
+    EXPECT_EQ(shown[3], runner->calls[4]);
 
     // Reconfiguring: mon0 exists now, so it is not added again.
     runner->calls.clear();

@@ -85,7 +85,8 @@ public:
 
     /** Throws std::invalid_argument (bad settings, naming the key) or RouterError. */
     void configure(const CsiExtractionSettings& s);
-    /** The programs configure() runs (the nexutil value as `<params>`), for logs and tests. */
+    /** The programs configure() runs (the nexutil value as `<params>`; the monitor interface
+     *  is added only if `ip link show` says it doesn't exist), for logs. */
     std::vector<std::vector<std::string>> configureCommands(const CsiExtractionSettings& s) const;
     std::string describe() const { return runner_->describe(); }
 
