@@ -3,6 +3,7 @@
 #include <mrpt_wifi/sensor/Subprocess.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 
