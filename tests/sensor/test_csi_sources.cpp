@@ -284,7 +284,9 @@ TEST(Intel5300, SubcarrierGroupingFollows80211n)
 TEST(Esp32, MatchesTheIntegersEspIdfWrote)
 {
     CsiDecodeSummary s;
-    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s);
+    CsiDecodeOptions legacy;
+    legacy.esp32LegacyLtf = true;  // the L-LTF, though the lines also carry HT-LTFs
+    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s, legacy);
     EXPECT_EQ(s.format, "esp32");
     const auto ref = readCsv(data("esp32/csi_data.reference.csv"));
     ASSERT_EQ(frames.size(), 8u);
@@ -312,8 +314,122 @@ TEST(Esp32, MatchesTheIntegersEspIdfWrote)
             }
         }
         EXPECT_GE(correlation(ours, theirs), 0.9999);
-        EXPECT_EQ(f.dataSubcarriers().size(), 52u);
+        // first_word_invalid = 1: the buffer's first 4 bytes (k = 0 and k = +1) are no CSI.
+        EXPECT_EQ(f.dataSubcarriers().size(), 51u);
+        EXPECT_EQ(f.maskedBins, std::vector<uint16_t>{33});
     }
+}
+
+// The sample's lines are HT20 with STBC (sig_mode 1, cwb 0, stbc 1, no secondary channel, 384
+// values): L-LTF, HT-LTF and STBC-HT-LTF, 64 subcarriers each in FFT order (ESP-IDF's table).
+// By default a frame holds the HT-LTF as stream 0 and the STBC-HT-LTF as stream 1, on the
+// HT20 subcarriers ±1..±28, exactly the integers ESP-IDF wrote.
+TEST(Esp32, HtLtfAndStbcStreamFromEspIdfTable)
+{
+    CsiDecodeSummary s;
+    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s);
+    const auto ref = readCsv(data("esp32/csi_data.htltf.reference.csv"));
+    ASSERT_EQ(frames.size(), 8u);
+    ASSERT_EQ(ref.size(), 8u * 2u * 64u);
+    EXPECT_NE(s.details.find("8 frames from the HT-LTF (8 with STBC"), std::string::npos)
+        << s.details;
+    std::vector<int> ht20;
+    for (int k = -28; k <= 28; ++k)
+        if (k) ht20.push_back(k);
+    for (size_t i = 0; i < frames.size(); ++i)
+    {
+        const auto& f = *frames[i];
+        ASSERT_EQ(f.nTx, 2);
+        ASSERT_EQ(f.nRx, 1);
+        EXPECT_TRUE(f.isComplete());
+        EXPECT_EQ(f.chanspec.asString(), "1/20");
+        EXPECT_EQ(f.dataSubcarriers(), ht20);
+        EXPECT_TRUE(f.maskedBins.empty());  // the invalid first word is in the L-LTF
+        for (unsigned field = 0; field < 2; ++field)
+        {
+            std::vector<Complex> ours, theirs;
+            for (unsigned raw = 0; raw < 64; ++raw)
+            {
+                const auto& r = ref[(i * 2 + field) * 64 + raw];
+                ASSERT_EQ(unsigned(r[1]), field + 1);
+                const Complex expected(r[4], r[3]);
+                const int k = raw < 32 ? int(raw) : int(raw) - 64;
+                const Complex got = f.at(field, 0, unsigned(k + 32));
+                EXPECT_EQ(got, expected) << "line " << i << " field " << field << " k " << k;
+                if (k != 0 && std::abs(k) <= 28)
+                {
+                    ours.push_back(got);
+                    theirs.push_back(expected);
+                }
+            }
+            EXPECT_GE(correlation(ours, theirs), 0.9999);
+        }
+    }
+}
+
+// The other rows of ESP-IDF's table: which fields, over which subcarriers, on which channel.
+TEST(Esp32, BufferLayoutFollowsEspIdfTable)
+{
+    struct Row
+    {
+        int secondary;
+        unsigned sigMode, cwb, stbc, values;
+        std::vector<size_t> entries;  // per field
+        unsigned bw;
+        size_t htMeasured;  // subcarriers of the HT-LTF (0: none)
+    };
+    const std::vector<Row> rows = {
+        {0, 0, 0, 0, 128, {64}, 20, 0},
+        {0, 1, 0, 0, 256, {64, 64}, 20, 56},
+        {2, 0, 0, 0, 128, {64}, 40, 0},
+        {2, 1, 0, 1, 380, {64, 63, 63}, 40, 56},
+        {2, 1, 1, 0, 384, {64, 128}, 40, 114},
+        {2, 1, 1, 1, 612, {64, 121, 121}, 40, 114},
+        {1, 1, 0, 0, 256, {64, 64}, 40, 56},
+        {1, 1, 0, 1, 376, {64, 62, 62}, 40, 56},
+        {1, 1, 1, 1, 612, {64, 121, 121}, 40, 114}};
+    for (const auto& row : rows)
+    {
+        esp32::Esp32Line l;
+        l.hasPacketInfo = true;
+        l.secondaryChannel = row.secondary;
+        l.sigMode = row.sigMode;
+        l.cwb = row.cwb;
+        l.stbc = row.stbc;
+        l.channel = 6;
+        l.values.assign(row.values, 1);
+        const auto layout = esp32::bufferLayout(l);
+        const std::string where = "secondary " + std::to_string(row.secondary) + " sig_mode " +
+                                  std::to_string(row.sigMode) + " cwb " + std::to_string(row.cwb) +
+                                  " stbc " + std::to_string(row.stbc);
+        EXPECT_TRUE(layout.matchedTable) << where;
+        EXPECT_EQ(layout.bandwidthMHz, row.bw) << where;
+        ASSERT_EQ(layout.blocks.size(), row.entries.size()) << where;
+        for (size_t b = 0; b < row.entries.size(); ++b)
+            EXPECT_EQ(layout.blocks[b].k.size(), row.entries[b]) << where << " field " << b;
+        EXPECT_EQ(layout.blocks[0].measured.size(), 52u) << where;
+        if (row.htMeasured) EXPECT_EQ(layout.blocks[1].measured.size(), row.htMeasured) << where;
+        // The L-LTF sits on the primary 20 MHz: the upper half of the 40 MHz channel when the
+        // secondary one is below (2), the lower half when above (1).
+        if (row.secondary == 2) EXPECT_EQ(layout.blocks[0].measured.front(), 32 - 26) << where;
+        if (row.secondary == 1) EXPECT_EQ(layout.blocks[0].measured.back(), -32 + 26) << where;
+
+        CObservationWiFiCSI obs;
+        std::string why;
+        ASSERT_TRUE(esp32::toObservation(l, obs, why)) << where << ": " << why;
+        EXPECT_EQ(obs.nTx, row.stbc && row.sigMode == 1 ? 2 : 1) << where;
+        EXPECT_EQ(obs.chanspec.bandwidthMHz, row.bw) << where;
+        if (row.secondary == 2) EXPECT_EQ(obs.chanspec.asBroadcomString(), "6/40") << where;
+    }
+    // A length the table doesn't give (an LTF disabled in wifi_csi_config_t): the L-LTF only.
+    esp32::Esp32Line l;
+    l.hasPacketInfo = true;
+    l.sigMode = 1;
+    l.values.assign(200, 1);
+    const auto layout = esp32::bufferLayout(l);
+    EXPECT_FALSE(layout.matchedTable);
+    ASSERT_EQ(layout.blocks.size(), 1u);
+    EXPECT_EQ(layout.blocks[0].kind, esp32::LtfBlock::Kind::LLTF);
 }
 
 // --------------------------------------------------------------------------- detection
