@@ -6,6 +6,7 @@
 #include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
+#include <mrpt_wifi/sensor/AtherosCsiFormat.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/Esp32CsiFormat.h>
 #include <mrpt_wifi/sensor/Intel5300Format.h>
@@ -408,18 +409,30 @@ TEST(Esp32, BufferLayoutFollowsEspIdfTable)
         for (size_t b = 0; b < row.entries.size(); ++b)
             EXPECT_EQ(layout.blocks[b].k.size(), row.entries[b]) << where << " field " << b;
         EXPECT_EQ(layout.blocks[0].measured.size(), 52u) << where;
-        if (row.htMeasured) EXPECT_EQ(layout.blocks[1].measured.size(), row.htMeasured) << where;
+        if (row.htMeasured)
+        {
+            EXPECT_EQ(layout.blocks[1].measured.size(), row.htMeasured) << where;
+        }
         // The L-LTF sits on the primary 20 MHz: the upper half of the 40 MHz channel when the
         // secondary one is below (2), the lower half when above (1).
-        if (row.secondary == 2) EXPECT_EQ(layout.blocks[0].measured.front(), 32 - 26) << where;
-        if (row.secondary == 1) EXPECT_EQ(layout.blocks[0].measured.back(), -32 + 26) << where;
+        if (row.secondary == 2)
+        {
+            EXPECT_EQ(layout.blocks[0].measured.front(), 32 - 26) << where;
+        }
+        if (row.secondary == 1)
+        {
+            EXPECT_EQ(layout.blocks[0].measured.back(), -32 + 26) << where;
+        }
 
         CObservationWiFiCSI obs;
         std::string why;
         ASSERT_TRUE(esp32::toObservation(l, obs, why)) << where << ": " << why;
         EXPECT_EQ(obs.nTx, row.stbc && row.sigMode == 1 ? 2 : 1) << where;
         EXPECT_EQ(obs.chanspec.bandwidthMHz, row.bw) << where;
-        if (row.secondary == 2) EXPECT_EQ(obs.chanspec.asBroadcomString(), "6/40") << where;
+        if (row.secondary == 2)
+        {
+            EXPECT_EQ(obs.chanspec.asBroadcomString(), "6/40") << where;
+        }
     }
     // A length the table doesn't give (an LTF disabled in wifi_csi_config_t): the L-LTF only.
     esp32::Esp32Line l;
@@ -432,6 +445,54 @@ TEST(Esp32, BufferLayoutFollowsEspIdfTable)
     EXPECT_EQ(layout.blocks[0].kind, esp32::LtfBlock::Kind::LLTF);
 }
 
+// --------------------------------------------------------------------------- Atheros
+// The first 8 records of a public Atheros CSI Tool log against the tool's own reader
+// (read_log_file + read_csi, run in Octave; it returns the first 6): every value equal.
+TEST(Atheros, MatchesTheCsiToolsReader)
+{
+    CsiDecodeSummary s;
+    const auto frames = decodeAll(data("atheros/ath_csi_1.first8.dat"), "auto", &s);
+    EXPECT_EQ(s.format, "atheros");
+    ASSERT_EQ(frames.size(), 8u);
+    const auto ref = readCsv(data("atheros/ath_csi_1.first8.reference.csv"));
+    const auto meta = readCsv(data("atheros/ath_csi_1.first8.reference_meta.csv"));
+    ASSERT_EQ(meta.size(), 6u);
+    ASSERT_EQ(ref.size(), 6u * 3 * 2 * 56);
+    std::map<std::array<int, 4>, Complex> expected;  // record, rx, tx, tone
+    for (const auto& r : ref)
+        expected[{int(r[0]), int(r[1]), int(r[2]), int(r[3])}] = Complex(float(r[4]), float(r[5]));
+    const auto& ks = atheros::toneSubcarriers(56);
+    for (size_t i = 0; i < meta.size(); ++i)
+    {
+        const auto& f = *frames[i];
+        EXPECT_EQ(f.source, "ar9300");
+        EXPECT_EQ(f.nRx, 3);
+        EXPECT_EQ(f.nTx, 2);
+        EXPECT_TRUE(f.isComplete());
+        EXPECT_EQ(f.chanspec.asString(), "6/20");
+        EXPECT_EQ(f.dataSubcarriers().size(), 56u);
+        EXPECT_NEAR(mrpt::Clock::toDouble(f.timestamp), meta[i][1] * 1e-6, 1e-6);
+        ASSERT_EQ(f.antennaRssi_dB.size(), 3u);
+        EXPECT_EQ(f.antennaRssi_dB[0], float(meta[i][10]));
+        EXPECT_EQ(f.antennaRssi_dB[2], float(meta[i][12]));
+        for (unsigned tx = 0; tx < 2; ++tx)
+            for (unsigned rx = 0; rx < 3; ++rx)
+            {
+                std::vector<Complex> ours, theirs;
+                for (unsigned t = 0; t < 56; ++t)
+                {
+                    const Complex want = expected.at({int(i), int(rx), int(tx), int(t)});
+                    const Complex got = f.at(tx, rx, subcarrierToBin(ks[t], 64));
+                    EXPECT_EQ(got, want)
+                        << "record " << i << " rx " << rx << " tx " << tx << " tone " << t;
+                    ours.push_back(got);
+                    theirs.push_back(want);
+                }
+                EXPECT_GE(correlation(ours, theirs), 0.9999);
+            }
+    }
+}
+
 // --------------------------------------------------------------------------- detection
 TEST(CsiDecoders, DetectedByContentNotByName)
 {
@@ -440,6 +501,7 @@ TEST(CsiDecoders, DetectedByContentNotByName)
         {"nexmon/bcm4358-80mhz.pcap", "nexmon"},
         {"intel5300/log.all_csi.6.7.6.dat", "intel5300"},
         {"esp32/csi_data.csv", "esp32"},
+        {"atheros/ath_csi_1.first8.dat", "atheros"},
         {"rawlog/v0-bcm4366c0.rawlog", "rawlog"}};
     for (const auto& [file, format] : samples)
     {
@@ -452,7 +514,7 @@ TEST(CsiDecoders, DetectedByContentNotByName)
     std::ofstream(tmp.file("junk.bin")) << "hello, this is no CSI at all\n";
     EXPECT_THROW(CsiDecoderRegistry::instance().detect(tmp.file("junk.bin")), std::runtime_error);
     CsiDecodeOptions o;
-    EXPECT_THROW(applyFormatOption("atheros", o), std::invalid_argument);
+    EXPECT_THROW(applyFormatOption("picoscenes", o), std::invalid_argument);
     EXPECT_EQ(applyFormatOption("ubilocate", o), "nexmon");
     EXPECT_EQ(o.assembler.format, nexmon::FormatHint::UbiLocate);
 }
@@ -647,3 +709,31 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
 }
 
 }  // namespace
+
+TEST(Atheros, BadRecordsNameFileOffsetAndFormat)
+{
+    test::TempDir tmp;
+    const std::string text = test::readFile(data("atheros/ath_csi_1.first8.dat"));
+    // Truncated in the third record (each record is 2 + 1905 bytes): two frames stay.
+    const std::string cut = tmp.file("cut.dat");
+    std::ofstream(cut, std::ios::binary) << text.substr(0, 2 * 1907 + 900);
+    std::vector<CObservationWiFiCSI::Ptr> got;
+    const auto e = expectDecodeError(
+        [&] {
+            decodeCsiFile(
+                cut, "atheros", {}, [&](CObservationWiFiCSI::Ptr&& f) { got.push_back(f); });
+        });
+    EXPECT_EQ(got.size(), 2u);
+    EXPECT_EQ(e.offset, 2u * 1907);
+    EXPECT_EQ(e.format, "atheros");
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+    // Impossible antenna count in the second record's status (nr at byte 2 + 17).
+    std::string bad = text;
+    bad[1907 + 2 + 17] = 7;
+    const std::string badPath = tmp.file("bad.dat");
+    std::ofstream(badPath, std::ios::binary) << bad;
+    const auto e2 =
+        expectDecodeError([&] { decodeCsiFile(badPath, "atheros", {}, [](auto&&) {}); });
+    EXPECT_EQ(e2.offset, 1907u);
+    EXPECT_NE(std::string(e2.what()).find("nr=7"), std::string::npos) << e2.what();
+}
