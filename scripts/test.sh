@@ -32,7 +32,7 @@ fi
 echo "== [2/3] ASan + UBSan build, unit suites"
 # The unit suites of every library, instrumented. Integration tests load our (instrumented)
 # plugin into Debian's uninstrumented MRPT apps, which ASan does not allow: they ran in step 1.
-asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_calib test_tx_calib test_localization"
+asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization"
 if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMRPT_WIFI_SANITIZE=ON \
      -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null &&
    cmake --build build-asan -j"$(nproc)" --target $asan_targets; then

@@ -681,7 +681,8 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
 {
     test::TempDir tmp;
     for (const char* file :
-         {"intel5300/log.all_csi.6.7.6.dat", "esp32/csi_data.csv", "nexmon/bcm43455c0-80mhz.pcap"})
+         {"intel5300/log.all_csi.6.7.6.dat", "esp32/csi_data.csv", "nexmon/bcm43455c0-80mhz.pcap",
+          "atheros/ath_csi_1.first8.dat"})
     {
         const std::string rawlog = tmp.file("out.rawlog");
         const auto imp = test::run(test::binDir() + "/csi-import -q " + data(file) + " " + rawlog);
