@@ -135,12 +135,23 @@ std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const Chanspe
 std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const CObservationWiFiCSI& in)
 {
     const Chanspec& cs = in.chanspec;
-    auto key = std::make_pair(
-        (uint32_t(cs.centerChannel) << 16) | uint32_t(cs.bandwidthMHz), in.subcarrierIndices);
+    const uint32_t channelKey = (uint32_t(cs.centerChannel) << 16) | uint32_t(cs.bandwidthMHz);
+    // Consecutive frames almost always share the layout: no key copy, no map lookup then.
+    if (lastLayout_ && lastLayoutKey_.first == channelKey &&
+        lastLayoutKey_.second == in.subcarrierIndices)
+        return lastLayout_;
+    auto key = std::make_pair(channelKey, in.subcarrierIndices);
     auto it = layouts_.find(key);
-    if (it != layouts_.end()) return it->second;
+    if (it != layouts_.end())
+    {
+        lastLayoutKey_ = it->first;
+        return lastLayout_ = it->second;
+    }
     if (in.subcarrierIndices.empty())
-        return layouts_.emplace(std::move(key), layoutFor(cs)).first->second;
+    {
+        lastLayoutKey_ = key;
+        return lastLayout_ = layouts_.emplace(std::move(key), layoutFor(cs)).first->second;
+    }
 
     auto layout = std::make_shared<SubcarrierLayout>();
     layout->chanspec = cs;
@@ -160,7 +171,8 @@ std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const CObserv
         layout->bins.push_back(uint16_t(subcarrierToBin(k, cs.nfft())));
         layout->frequencies_Hz.push_back(subcarrierFrequencyHz(cs, k));
     }
-    return layouts_.emplace(std::move(key), std::move(layout)).first->second;
+    lastLayoutKey_ = key;
+    return lastLayout_ = layouts_.emplace(std::move(key), std::move(layout)).first->second;
 }
 
 CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(

@@ -190,6 +190,8 @@ private:
     /** Layouts by (centre channel << 16 | bandwidth, the observation's subcarrier list). */
     std::map<std::pair<uint32_t, std::vector<int16_t>>, std::shared_ptr<const SubcarrierLayout>>
         layouts_;
+    std::pair<uint32_t, std::vector<int16_t>> lastLayoutKey_;  //!< of lastLayout_
+    std::shared_ptr<const SubcarrierLayout> lastLayout_;
 };
 
 /** The recent frames of one transmitter: a ring of CleanCsi, storage reused. Frames of another
