@@ -32,7 +32,7 @@ fi
 echo "== [2/3] ASan + UBSan build, unit suites"
 # The unit suites of every library, instrumented. Integration tests load our (instrumented)
 # plugin into Debian's uninstrumented MRPT apps, which ASan does not allow: they ran in step 1.
-asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_calib test_tx_calib test_localization"
+asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization"
 if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMRPT_WIFI_SANITIZE=ON \
      -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null &&
    cmake --build build-asan -j"$(nproc)" --target $asan_targets; then
@@ -46,9 +46,9 @@ fi
 
 # The fuzz time is split between the assembler and one target per file decoder, so the total
 # stays FUZZ_SECONDS.
-fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32"
-per_target=$(( FUZZ_SECONDS / 4 > 0 ? FUZZ_SECONDS / 4 : 1 ))
-echo "== [3/3] libFuzzer: Nexmon assembler + nexmon/intel5300/esp32 decoders, ${per_target} s each"
+fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros"
+per_target=$(( FUZZ_SECONDS / 5 > 0 ? FUZZ_SECONDS / 5 : 1 ))
+echo "== [3/3] libFuzzer: Nexmon assembler + nexmon/intel5300/esp32/atheros decoders, ${per_target} s each"
 if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
      -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
      -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" >/dev/null &&
@@ -61,6 +61,7 @@ if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Rel
       fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ ;;
       fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ ;;
       fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ ;;
+      fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ ;;
     esac
     if build-fuzz/bin/$target -max_total_time="$per_target" -max_len=20000 \
          -print_final_stats=1 "$corpus" >build-fuzz/$target.log 2>&1; then

@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt_wifi/obs/Chanspec.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -20,6 +21,8 @@ unsigned bandwidthCode(unsigned mhz)
             return 3;
         case 80:
             return 4;
+        case 160:
+            return 5;
         default:
             return 0;
     }
@@ -38,8 +41,9 @@ const std::vector<unsigned>& blockStarts(unsigned mhz)
     static const std::vector<unsigned> starts40 = {36,  44,  52,  60,  100, 108, 116,
                                                    124, 132, 140, 149, 157, 165, 173};
     static const std::vector<unsigned> starts80 = {36, 52, 100, 116, 132, 149, 165};
+    static const std::vector<unsigned> starts160 = {36, 100, 149};
     static const std::vector<unsigned> none;
-    return mhz == 40 ? starts40 : mhz == 80 ? starts80 : none;
+    return mhz == 40 ? starts40 : mhz == 80 ? starts80 : mhz == 160 ? starts160 : none;
 }
 
 bool channelFitsBand(unsigned ch, WifiBand band)
@@ -65,8 +69,12 @@ std::optional<Chanspec> Chanspec::decode(uint16_t word)
         case 4:
             cs.bandwidthMHz = 80;
             break;
+        case 5:
+            cs.bandwidthMHz = 160;
+            break;
         default:
-            return std::nullopt;  // 160, 80+80 and reserved codes: not on the 4366c0
+            return std::nullopt;  // 80+80 (code 6: two channel indices, not a channel number)
+                                  // and the reserved codes
     }
     const uint16_t band = word & kBandMask;
     if (band == kBand5G)
@@ -78,6 +86,15 @@ std::optional<Chanspec> Chanspec::decode(uint16_t word)
     if (!channelFitsBand(cs.centerChannel, cs.band)) return std::nullopt;
     if (cs.band == WifiBand::Band2G4 && cs.bandwidthMHz > 40) return std::nullopt;
     if (cs.sideband >= sidebandCount(cs.bandwidthMHz)) return std::nullopt;
+    if (cs.bandwidthMHz == 160)
+    {
+        // Only three 160 MHz channels exist (centres 50, 114, 163).
+        const auto& starts = blockStarts(160);
+        if (std::none_of(
+                starts.begin(), starts.end(),
+                [&](unsigned start) { return cs.centerChannel == start + 14; }))
+            return std::nullopt;
+    }
     return cs;
 }
 
@@ -86,7 +103,7 @@ Chanspec Chanspec::make(unsigned centerChannel, unsigned bandwidthMHz, unsigned 
     const unsigned bwCode = bandwidthCode(bandwidthMHz);
     if (!bwCode)
         throw std::invalid_argument(
-            "unsupported bandwidth " + std::to_string(bandwidthMHz) + " MHz (20, 40 or 80)");
+            "unsupported bandwidth " + std::to_string(bandwidthMHz) + " MHz (20, 40, 80 or 160)");
     const WifiBand band = centerChannel <= 14 ? WifiBand::Band2G4 : WifiBand::Band5G;
     const uint16_t word = uint16_t(
         (band == WifiBand::Band5G ? kBand5G : kBand2G) | (bwCode << 11) | ((sideband & 7) << 8) |

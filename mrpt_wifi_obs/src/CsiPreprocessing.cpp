@@ -4,6 +4,7 @@
 #include <mrpt_wifi/obs/Subcarriers.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace mrpt_wifi
@@ -131,22 +132,70 @@ std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const Chanspe
     return layout;
 }
 
-CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(const Chanspec& cs, unsigned nRx)
+std::shared_ptr<const SubcarrierLayout> CsiPreprocessor::layoutFor(const CObservationWiFiCSI& in)
 {
-    const uint32_t key =
-        (uint32_t(cs.centerChannel) << 16) | (uint32_t(cs.bandwidthMHz) << 4) | nRx;
+    const Chanspec& cs = in.chanspec;
+    const uint32_t channelKey = (uint32_t(cs.centerChannel) << 16) | uint32_t(cs.bandwidthMHz);
+    // Consecutive frames almost always share the layout: no key copy, no map lookup then.
+    if (lastLayout_ && lastLayoutKey_.first == channelKey &&
+        lastLayoutKey_.second == in.subcarrierIndices)
+        return lastLayout_;
+    auto key = std::make_pair(channelKey, in.subcarrierIndices);
+    auto it = layouts_.find(key);
+    if (it != layouts_.end())
+    {
+        lastLayoutKey_ = it->first;
+        return lastLayout_ = it->second;
+    }
+    if (in.subcarrierIndices.empty())
+    {
+        lastLayoutKey_ = key;
+        return lastLayout_ = layouts_.emplace(std::move(key), layoutFor(cs)).first->second;
+    }
+
+    auto layout = std::make_shared<SubcarrierLayout>();
+    layout->chanspec = cs;
+    layout->centerFrequency_Hz = cs.centerFrequencyHz();
+    layout->sourceListed = true;
+    const int half = int(cs.nfft() / 2);
+    for (size_t j = 0; j < in.subcarrierIndices.size(); ++j)
+    {
+        const int k = in.subcarrierIndices[j];
+        if (k < -half || k >= half || (j > 0 && k <= in.subcarrierIndices[j - 1]))
+            throw std::invalid_argument(
+                "subcarrier list of a " + in.source + " frame on " + cs.asString() + ": index " +
+                std::to_string(k) + " at position " + std::to_string(j) +
+                (k < -half || k >= half ? " is outside ±" + std::to_string(half)
+                                        : " is not above the previous one"));
+        layout->subcarriers.push_back(k);
+        layout->bins.push_back(uint16_t(subcarrierToBin(k, cs.nfft())));
+        layout->frequencies_Hz.push_back(subcarrierFrequencyHz(cs, k));
+    }
+    lastLayoutKey_ = key;
+    return lastLayout_ = layouts_.emplace(std::move(key), std::move(layout)).first->second;
+}
+
+CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(
+    const std::shared_ptr<const SubcarrierLayout>& layout, unsigned nRx)
+{
+    const auto key = std::make_pair(layout.get(), nRx);
     auto it = caches_.find(key);
     if (it != caches_.end()) return it->second;
 
+    const Chanspec& cs = layout->chanspec;
     ChannelCache c;
-    c.layout = layoutFor(cs);
+    c.layout = layout;
     const size_t nSub = c.layout->size();
     c.sign = Eigen::VectorXf::Ones(Eigen::Index(nSub));
     c.signImag = Eigen::VectorXf::Zero(Eigen::Index(nSub));
-    for (size_t j = 0; j < nSub; ++j)
+    // The sub-band sign quirks are the Nexmon firmware's: not for sources with their own list.
+    const bool nexmonLayout = !layout->sourceListed;
+    for (size_t j = 0; j < nSub && nexmonLayout; ++j)
     {
         const int k = c.layout->subcarriers[j];
-        if (cs.bandwidthMHz == 80 && options_.correctSubbandSign80 && k < -64)
+        const bool flip80 = cs.bandwidthMHz == 80 && options_.correctSubbandSign80;
+        const bool flip160 = cs.bandwidthMHz == 160 && options_.correctSubbandSign160;
+        if ((flip80 || flip160) && inNegatedSubband(k, cs.bandwidthMHz))
         {
             c.sign[Eigen::Index(j)] = -1.f;
             c.hasSignCorrection = true;
@@ -207,8 +256,10 @@ void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
             rxArray_.name + "'" +
             (rxArray_.sourcePath.empty() ? "" : " (" + rxArray_.sourcePath + ")") + " has " +
             std::to_string(rxArray_.size()) + " elements");
-    dataSubcarriers(cs.bandwidthMHz);   // throws for an unsupported bandwidth
-    const auto& c = cacheFor(cs, nRx);  // throws CalibrationError for a mismatching calibration
+    CObservationWiFiCSI standard;
+    standard.chanspec = cs;
+    // Throws for an unsupported bandwidth, then CalibrationError for a mismatching calibration.
+    const auto& c = cacheFor(layoutFor(standard), nRx);
     if (options_.requireCalibration && !c.calibration)
         throw CalibrationError(
             "no phase calibration for device '" + rxArray_.name + "' on " + cs.asString() +
@@ -218,14 +269,33 @@ void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
 double CsiPreprocessor::estimatePhaseSlope(
     const Eigen::Ref<const Eigen::MatrixXcf>& H, const std::vector<int>& k)
 {
-    std::complex<double> acc = 0;
+    // Σ conj(h_j)·h_{j+1} per spacing k_{j+1} − k_j: its angle is spacing × slope (+ noise).
+    constexpr int kMaxGap = 8;
+    std::array<std::complex<double>, kMaxGap + 1> acc{};
+    std::array<size_t, kMaxGap + 1> count{};
     for (size_t j = 0; j + 1 < k.size(); ++j)
     {
-        if (k[j + 1] - k[j] != 1) continue;
+        const int gap = k[j + 1] - k[j];
+        if (gap < 1 || gap > kMaxGap) continue;
         const auto c = H.col(Eigen::Index(j + 1)).dot(H.col(Eigen::Index(j)));  // Σ conj(a)·b
-        acc += std::conj(std::complex<double>(c));
+        acc[size_t(gap)] += std::conj(std::complex<double>(c));
+        ++count[size_t(gap)];
     }
-    return std::arg(acc);
+    const size_t dominant = size_t(std::max_element(count.begin(), count.end()) - count.begin());
+    if (count[dominant] == 0) return 0;
+    // Contiguous layouts (Nexmon): neighbours only, as the gaps at pilots add nothing.
+    if (dominant == 1) return std::arg(acc[1]);
+    const double coarse = std::arg(acc[dominant]) / double(dominant);
+    double num = 0, den = 0;
+    for (size_t g = 1; g <= size_t(kMaxGap); ++g)
+    {
+        if (!count[g]) continue;
+        const double w = std::abs(acc[g]);
+        const double residual = std::arg(acc[g] * std::polar(1.0, -coarse * double(g)));
+        num += w * double(g) * residual;
+        den += w * double(g * g);
+    }
+    return den > 0 ? coarse + num / den : coarse;
 }
 
 RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& out)
@@ -235,11 +305,10 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     if (in.nRx < 2) return RejectReason::SingleAntenna;
     const unsigned nRx = in.nRx;
     const unsigned nfft = in.nfft();
-    if (in.chanspec.bandwidthMHz != 20 && in.chanspec.bandwidthMHz != 40 &&
-        in.chanspec.bandwidthMHz != 80)
-        return RejectReason::UnsupportedChannel;
+    const unsigned bw = in.chanspec.bandwidthMHz;
+    if (bw != 20 && bw != 40 && bw != 80 && bw != 160) return RejectReason::UnsupportedChannel;
     if (in.csi.size() < size_t(in.nTx) * nRx * nfft) return RejectReason::NoCompleteStream;
-    ChannelCache& cache = cacheFor(in.chanspec, nRx);
+    ChannelCache& cache = cacheFor(layoutFor(in), nRx);
     if (options_.requireCalibration && !cache.calibration) return RejectReason::NoCalibration;
     const SubcarrierLayout& layout = *cache.layout;
     const size_t nSub = layout.size();

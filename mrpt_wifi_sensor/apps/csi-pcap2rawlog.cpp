@@ -60,6 +60,11 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argTimeout(
                 "", "frame-timeout", "Seconds after which an incomplete frame is written as it is",
                 false, 0.1, "S", cmd);
+            TCLAP::SwitchArg argEsp32Lltf(
+                "", "esp32-lltf",
+                "ESP32 lines: keep the L-LTF (52 subcarriers) even when the line has an HT-LTF "
+                "(by default the HT-LTF, and with STBC both space-time streams)",
+                cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
 
             cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
@@ -70,6 +75,7 @@ int main(int argc, char** argv)
             options.udpPort = uint16_t(argPort.getValue());
             const std::string format = applyFormatOption(argFormat.getValue(), options);
             if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
+            options.esp32LegacyLtf = argEsp32Lltf.getValue();
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
             options.assembler.frameTimeout_s = argTimeout.getValue();
             options.assembler.sensorLabel = argLabel.getValue();

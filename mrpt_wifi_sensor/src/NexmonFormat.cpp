@@ -96,9 +96,13 @@ unsigned chipCores(Chip c)
     return 0;
 }
 
-bool chipSupportsBandwidth(Chip, unsigned bandwidthMHz)
+bool chipSupportsBandwidth(Chip c, unsigned bandwidthMHz)
 {
-    // nexmon_csi: "up to 80 MHz bandwidth" on all four chips; the 2.4 GHz band at 20/40.
+    // nexmon_csi: "up to 80 MHz bandwidth" on all four chips; the 2.4 GHz band at 20/40. The
+    // BCM4366c0 radio also does 160 MHz (chanspec code 5, 512 words per report); nexmon_csi
+    // does not document it, so 160 MHz is decoded for the 4366c0 only, from firmware that
+    // reports it (and from the emulator / simulator).
+    if (bandwidthMHz == 160) return c == Chip::BCM4366c0;
     return bandwidthMHz == 20 || bandwidthMHz == 40 || bandwidthMHz == 80;
 }
 
@@ -233,6 +237,11 @@ bool parseHeader(
             return false;
         }
         h.chipId = word16;
+        if (!chipSupportsBandwidth(h.chip, chanspec->bandwidthMHz))
+        {
+            why = RejectReason::BadChanspec;
+            return false;
+        }
         if (h.chip == Chip::BCM4366c0)
         {
             // 4366c0: core in bits 8–10, stream in bits 11–13.

@@ -89,10 +89,12 @@ inline AccuracyDataset makeDataset(const AccuracyCase& c)
 }
 
 /** A case on random room `seed` (mrpt_wifi::sim::randomRoomScenario). */
-inline AccuracyDataset makeRandomRoomDataset(const AccuracyCase& c, uint32_t seed)
+inline AccuracyDataset makeRandomRoomDataset(
+    const AccuracyCase& c, uint32_t seed, const std::string& receiver = "rt-ac86u")
 {
     sim::RandomRoomOptions ro;
     ro.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
+    ro.receiver = receiver;
     return makeDataset(c, sim::randomRoomScenario(seed, ro));
 }
 

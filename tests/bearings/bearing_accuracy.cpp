@@ -22,14 +22,16 @@ namespace
 /** The random-room tables: every estimator, LoS-only and moderate multipath, 10–30 dB. */
 int roomTables(
     unsigned rooms, bool evaluation, unsigned estimatesPerRoom, const std::vector<double>& snrs,
-    const std::vector<std::string>& algos, const std::string& params, unsigned windowFrames)
+    const std::vector<std::string>& algos, const std::string& params, unsigned windowFrames,
+    const std::string& receiver)
 {
     const auto seeds = roomSeeds(evaluation, rooms);
     std::cout << std::fixed << std::setprecision(2);
     std::cout << "# AoA accuracy over " << rooms << " random rooms ("
               << (evaluation ? "evaluation" : "development") << " seeds " << seeds.front() << "–"
-              << seeds.back() << "), " << estimatesPerRoom
-              << " estimates per room, 8-frame windows, true receiver offsets\n\n"
+              << seeds.back() << "), " << estimatesPerRoom << " estimates per room, "
+              << windowFrames << "-frame windows, receiver " << receiver
+              << ", true receiver offsets, true poses\n\n"
               << "Error to the nearer reported mirror candidate; 'central': truth within 75° of "
                  "broadside. Coverage: share of errors within 2σ / 3σ of the reported σ. CRB: "
                  "median one-path Cramér–Rao bound.\n\n";
@@ -49,7 +51,7 @@ int roomTables(
                 c.snr_dB = snr;
                 c.estimates = estimatesPerRoom;
                 c.windowFrames = windowFrames;
-                data.push_back(makeRandomRoomDataset(c, seed));
+                data.push_back(makeRandomRoomDataset(c, seed, receiver));
             }
             for (const auto& n : algos)
             {
@@ -99,6 +101,7 @@ int main(int argc, char** argv)
     std::vector<std::string> algos;
     std::string params = "{}";
     unsigned windowFrames = 8;
+    std::string receiver = "rt-ac86u";
     for (int i = 1; i < argc; ++i)
     {
         if (!std::strcmp(argv[i], "--estimates") && i + 1 < argc)
@@ -117,12 +120,17 @@ int main(int argc, char** argv)
             params = argv[++i];
         else if (!std::strcmp(argv[i], "--window-frames") && i + 1 < argc)
             windowFrames = unsigned(std::atoi(argv[++i]));
+        else if (
+            !std::strcmp(argv[i], "--receiver") && i + 1 < argc &&
+            sim::isRandomRoomReceiver(argv[i + 1]))
+            receiver = argv[++i];
         else
         {
             std::cerr
                 << "usage: bearing-accuracy [--estimates N] [--quick]\n"
                    "       bearing-accuracy --rooms N [--development] [--estimates "
-                   "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n";
+                   "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n"
+                   "         [--receiver rt-ac86u|intel5300]\n";
             return 1;
         }
     }
@@ -131,7 +139,8 @@ int main(int argc, char** argv)
         if (algos.empty())
             for (const auto& n : bearing::estimatorNames())
                 if (n != "aod") algos.push_back(n);
-        return roomTables(rooms, !development, estimates, snrs, algos, params, windowFrames);
+        return roomTables(
+            rooms, !development, estimates, snrs, algos, params, windowFrames, receiver);
     }
     const auto names = bearing::estimatorNames();
     std::cout << std::fixed << std::setprecision(2);

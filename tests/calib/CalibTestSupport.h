@@ -29,6 +29,9 @@ struct DriveSpec
     bool splitter = false;
     double frameRate_Hz = 100;
     bool odometry = false;  //!< CObservationOdometry in the stream (starts at the origin)
+    /** Receiver array file under share/arrays and its CSI format (receiver.csi_format). */
+    std::string array = "rt-ac86u";
+    std::string csiFormat = "nexmon";
 };
 
 inline std::string scenarioText(const DriveSpec& d)
@@ -60,7 +63,8 @@ inline std::string scenarioText(const DriveSpec& d)
       << "\n    frame_rate_hz: " << d.frameRate_Hz << "\n";
     s << "receiver:\n  array: "
       << (d.splitter ? "{name: splitter, elements: [[0, 0], [0, 1e-6], [0, 2e-6], [0, 3e-6]]}"
-                     : std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/rt-ac86u.yaml")
+                     : std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/" + d.array + ".yaml")
+      << "\n  csi_format: " << d.csiFormat
       << "\n  sensor_pose: {x: 0.1, y: 0.0, z: 0.4, yaw_deg: 0}\n";
     s << "motion:\n  type: " << d.motion << "\n  start: [" << d.startX << ", " << d.startY << ", "
       << d.startYaw_deg << "]\n";
@@ -82,6 +86,12 @@ inline mrpt_wifi::AntennaArray rtac86u()
 {
     return mrpt_wifi::AntennaArray::fromYamlFile(
         std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/rt-ac86u.yaml");
+}
+
+inline mrpt_wifi::AntennaArray arrayOf(const DriveSpec& d)
+{
+    return mrpt_wifi::AntennaArray::fromYamlFile(
+        std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/" + d.array + ".yaml");
 }
 
 /** Runs the simulator to its end, preparing every CSI frame with the true robot pose. Calls

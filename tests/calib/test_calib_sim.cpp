@@ -19,9 +19,9 @@ ChannelCalibration calibrate(
     const DriveSpec& d, std::unique_ptr<sim::Simulator>& simOut, CalibratorOptions opts = {})
 {
     simOut = std::make_unique<sim::Simulator>(calibtest::scenario(d));
-    FramePreparer prep(calibtest::rtac86u());
+    FramePreparer prep(calibtest::arrayOf(d));
     if (d.splitter) opts.mode = CalibrationMode::Splitter;
-    PhaseCalibrator cal(calibtest::rtac86u(), opts);
+    PhaseCalibrator cal(calibtest::arrayOf(d), opts);
     calibtest::driveFrames(
         *simOut, prep, d.splitter,
         [&](const CalibrationFrame& f, const sim::FrameTruth&) { cal.add(f); });
@@ -30,9 +30,10 @@ ChannelCalibration calibrate(
 }
 
 /** Frames of a drive (every `stride`-th), for bearing errors and checks. */
-std::vector<CalibrationFrame> frames(sim::Simulator& sim, size_t stride = 10)
+std::vector<CalibrationFrame> frames(
+    sim::Simulator& sim, size_t stride = 10, const AntennaArray& array = calibtest::rtac86u())
 {
-    FramePreparer prep(calibtest::rtac86u());
+    FramePreparer prep(array);
     std::vector<CalibrationFrame> out;
     size_t i = 0;
     sim.rewind(0);
@@ -107,6 +108,38 @@ INSTANTIATE_TEST_SUITE_P(
             if (ch == '/') ch = '_';
         return "ch" + s;
     });
+
+// Any source whose array geometry is given: an Intel 5300-style receiver (3 antennas 25 mm
+// apart, 40 MHz, only the 30 grouped subcarriers, int8 CSI) calibrates like the RT-AC86U.
+TEST(CalibSim, IntelStyleThreeAntennaSparseSource)
+{
+    DriveSpec d;
+    d.channel = "159/40";
+    d.array = "intel5300-linear-3";
+    d.csiFormat = "intel5300";
+    d.duration_s = 40;
+    std::unique_ptr<sim::Simulator> sim;
+    const ChannelCalibration res = calibrate(d, sim);
+    const auto& c = res.calibration;
+    EXPECT_TRUE(res.determined()) << (res.warnings.empty() ? "" : res.warnings.front());
+    ASSERT_EQ(c.antennas(), 3u);
+    EXPECT_EQ(c.subcarriers, htGroupedSubcarriers(40));
+    const double rms = calibtest::phaseErrorRms_deg(c, sim->hardware());
+
+    const auto array = calibtest::arrayOf(d);
+    sim::Simulator test(calibtest::scenario(testDriveOf(d)));
+    const auto tf = frames(test, 10, array);
+    ASSERT_GT(tf.size(), 200u);
+    const double before = quantile(bearingErrors_deg(tf, array, nullptr), 0.5);
+    const double after = quantile(bearingErrors_deg(tf, array, &c), 0.5);
+    std::cout << "[ intel5300 159/40 ] offset RMS error " << rms
+              << " deg; test drive median bearing error " << before << " -> " << after << " deg ("
+              << tf.size() << " frames)\n";
+    ::testing::Test::RecordProperty("intel5300_offset_rms_deg", std::to_string(rms));
+    EXPECT_LT(rms, 3.0);
+    EXPECT_LE(after, 3.0);
+    EXPECT_GT(before, 3 * after);
+}
 
 TEST(CalibSim, OldFileIsStaleAfterReboot)
 {

@@ -34,8 +34,8 @@ TEST(CWiFiCSISensorConfig, WrongKeysAndValuesAreNamed)
 
     e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nudp_port = 70000\n");
     EXPECT_NE(e.find("udp_port"), std::string::npos) << e;
-    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nchannel = 157/160\n");
-    EXPECT_NE(e.find("157/160"), std::string::npos) << e;
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nchannel = 155/160\n");
+    EXPECT_NE(e.find("155/160"), std::string::npos) << e;
     e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nmac_filter = 11:11:1x:*:*:*\n");
     EXPECT_NE(e.find("11:11:1x"), std::string::npos) << e;
     e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nscanner = radar\n");

@@ -1,7 +1,7 @@
 // libFuzzer target for one CSI file decoder (MRPT_WIFI_FUZZ_FORMAT: "nexmon", "intel5300",
-// "esp32"): arbitrary bytes as a whole input file through the decoder the CLIs use. Bad input
-// must end in CsiDecodeError / std::runtime_error, never in a crash, leak, UB or a frame whose
-// shape disagrees with its data.
+// "atheros", "esp32"): arbitrary bytes as a whole input file through the decoder the CLIs use. Bad
+// input must end in CsiDecodeError / std::runtime_error, never in a crash, leak, UB or a frame
+// whose shape disagrees with its data.
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <unistd.h>
 

@@ -34,7 +34,8 @@ TEST(Chanspec, MakeAndDecodeRoundTripEveryBandwidth)
     };
     for (const Case c :
          {Case{36, 20, 64, 5180e6}, Case{38, 40, 128, 5190e6}, Case{42, 80, 256, 5210e6},
-          Case{6, 20, 64, 2437e6}, Case{14, 20, 64, 2484e6}, Case{155, 80, 256, 5775e6}})
+          Case{6, 20, 64, 2437e6}, Case{14, 20, 64, 2484e6}, Case{155, 80, 256, 5775e6},
+          Case{50, 160, 512, 5250e6}, Case{114, 160, 512, 5570e6}, Case{163, 160, 512, 5815e6}})
     {
         const auto cs = Chanspec::make(c.ch, c.bw);
         const auto back = Chanspec::decode(cs.raw);
@@ -50,7 +51,9 @@ TEST(Chanspec, MakeAndDecodeRoundTripEveryBandwidth)
 
 TEST(Chanspec, RejectsWhatTheChipCannotUse)
 {
-    EXPECT_FALSE(Chanspec::decode(0xe89b));  // bandwidth code 5: 160 MHz
+    EXPECT_FALSE(Chanspec::decode(0xe89b));  // 160 MHz centred on 155: no such channel
+    EXPECT_FALSE(Chanspec::decode(0xf02a));  // bandwidth code 6: 80+80 (channel indices)
+    EXPECT_FALSE(Chanspec::decode(0x2806));  // 160 MHz at 2.4 GHz
     EXPECT_FALSE(Chanspec::decode(0x609b));  // band bits 01: not 2.4 or 5 GHz
     EXPECT_FALSE(Chanspec::decode(0xe000));  // channel 0
     EXPECT_FALSE(Chanspec::decode(0x2006));  // 80 MHz at 2.4 GHz
@@ -87,6 +90,13 @@ TEST(Chanspec, BroadcomControlChannelNotation)
     EXPECT_EQ(Chanspec::fromString("153/40").sideband, 1);
     EXPECT_EQ(Chanspec::fromString("106/80").raw, 0xe06a);
     EXPECT_FALSE(Chanspec::fromControlChannel(150, 80));
+    // 160 MHz: eight 20 MHz sub-channels; 36/160 is centre 50, 157/160 is centre 163, sideband 2.
+    EXPECT_EQ(Chanspec::fromString("36/160").centerChannel, 50);
+    EXPECT_EQ(Chanspec::fromString("157/160").centerChannel, 163);
+    EXPECT_EQ(Chanspec::fromString("157/160").sideband, 2);
+    EXPECT_EQ(Chanspec::fromString("157/160").asBroadcomString(), "157/160");
+    EXPECT_EQ(Chanspec::fromString("114/160").asString(), "114/160");
+    EXPECT_EQ(Chanspec::fromString("50/160").raw, 0xe832);
     for (unsigned c : {36u, 40u, 100u, 124u, 149u, 161u})
     {
         const auto back =

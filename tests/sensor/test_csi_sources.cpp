@@ -6,6 +6,7 @@
 #include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
+#include <mrpt_wifi/sensor/AtherosCsiFormat.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/Esp32CsiFormat.h>
 #include <mrpt_wifi/sensor/Intel5300Format.h>
@@ -284,7 +285,9 @@ TEST(Intel5300, SubcarrierGroupingFollows80211n)
 TEST(Esp32, MatchesTheIntegersEspIdfWrote)
 {
     CsiDecodeSummary s;
-    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s);
+    CsiDecodeOptions legacy;
+    legacy.esp32LegacyLtf = true;  // the L-LTF, though the lines also carry HT-LTFs
+    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s, legacy);
     EXPECT_EQ(s.format, "esp32");
     const auto ref = readCsv(data("esp32/csi_data.reference.csv"));
     ASSERT_EQ(frames.size(), 8u);
@@ -312,7 +315,181 @@ TEST(Esp32, MatchesTheIntegersEspIdfWrote)
             }
         }
         EXPECT_GE(correlation(ours, theirs), 0.9999);
-        EXPECT_EQ(f.dataSubcarriers().size(), 52u);
+        // first_word_invalid = 1: the buffer's first 4 bytes (k = 0 and k = +1) are no CSI.
+        EXPECT_EQ(f.dataSubcarriers().size(), 51u);
+        EXPECT_EQ(f.maskedBins, std::vector<uint16_t>{33});
+    }
+}
+
+// The sample's lines are HT20 with STBC (sig_mode 1, cwb 0, stbc 1, no secondary channel, 384
+// values): L-LTF, HT-LTF and STBC-HT-LTF, 64 subcarriers each in FFT order (ESP-IDF's table).
+// By default a frame holds the HT-LTF as stream 0 and the STBC-HT-LTF as stream 1, on the
+// HT20 subcarriers ±1..±28, exactly the integers ESP-IDF wrote.
+TEST(Esp32, HtLtfAndStbcStreamFromEspIdfTable)
+{
+    CsiDecodeSummary s;
+    const auto frames = decodeAll(data("esp32/csi_data.csv"), "auto", &s);
+    const auto ref = readCsv(data("esp32/csi_data.htltf.reference.csv"));
+    ASSERT_EQ(frames.size(), 8u);
+    ASSERT_EQ(ref.size(), 8u * 2u * 64u);
+    EXPECT_NE(s.details.find("8 frames from the HT-LTF (8 with STBC"), std::string::npos)
+        << s.details;
+    std::vector<int> ht20;
+    for (int k = -28; k <= 28; ++k)
+        if (k) ht20.push_back(k);
+    for (size_t i = 0; i < frames.size(); ++i)
+    {
+        const auto& f = *frames[i];
+        ASSERT_EQ(f.nTx, 2);
+        ASSERT_EQ(f.nRx, 1);
+        EXPECT_TRUE(f.isComplete());
+        EXPECT_EQ(f.chanspec.asString(), "1/20");
+        EXPECT_EQ(f.dataSubcarriers(), ht20);
+        EXPECT_TRUE(f.maskedBins.empty());  // the invalid first word is in the L-LTF
+        for (unsigned field = 0; field < 2; ++field)
+        {
+            std::vector<Complex> ours, theirs;
+            for (unsigned raw = 0; raw < 64; ++raw)
+            {
+                const auto& r = ref[(i * 2 + field) * 64 + raw];
+                ASSERT_EQ(unsigned(r[1]), field + 1);
+                const Complex expected(r[4], r[3]);
+                const int k = raw < 32 ? int(raw) : int(raw) - 64;
+                const Complex got = f.at(field, 0, unsigned(k + 32));
+                EXPECT_EQ(got, expected) << "line " << i << " field " << field << " k " << k;
+                if (k != 0 && std::abs(k) <= 28)
+                {
+                    ours.push_back(got);
+                    theirs.push_back(expected);
+                }
+            }
+            EXPECT_GE(correlation(ours, theirs), 0.9999);
+        }
+    }
+}
+
+// The other rows of ESP-IDF's table: which fields, over which subcarriers, on which channel.
+TEST(Esp32, BufferLayoutFollowsEspIdfTable)
+{
+    struct Row
+    {
+        int secondary;
+        unsigned sigMode, cwb, stbc, values;
+        std::vector<size_t> entries;  // per field
+        unsigned bw;
+        size_t htMeasured;  // subcarriers of the HT-LTF (0: none)
+    };
+    const std::vector<Row> rows = {
+        {0, 0, 0, 0, 128, {64}, 20, 0},
+        {0, 1, 0, 0, 256, {64, 64}, 20, 56},
+        {2, 0, 0, 0, 128, {64}, 40, 0},
+        {2, 1, 0, 1, 380, {64, 63, 63}, 40, 56},
+        {2, 1, 1, 0, 384, {64, 128}, 40, 114},
+        {2, 1, 1, 1, 612, {64, 121, 121}, 40, 114},
+        {1, 1, 0, 0, 256, {64, 64}, 40, 56},
+        {1, 1, 0, 1, 376, {64, 62, 62}, 40, 56},
+        {1, 1, 1, 1, 612, {64, 121, 121}, 40, 114}};
+    for (const auto& row : rows)
+    {
+        esp32::Esp32Line l;
+        l.hasPacketInfo = true;
+        l.secondaryChannel = row.secondary;
+        l.sigMode = row.sigMode;
+        l.cwb = row.cwb;
+        l.stbc = row.stbc;
+        l.channel = 6;
+        l.values.assign(row.values, 1);
+        const auto layout = esp32::bufferLayout(l);
+        const std::string where = "secondary " + std::to_string(row.secondary) + " sig_mode " +
+                                  std::to_string(row.sigMode) + " cwb " + std::to_string(row.cwb) +
+                                  " stbc " + std::to_string(row.stbc);
+        EXPECT_TRUE(layout.matchedTable) << where;
+        EXPECT_EQ(layout.bandwidthMHz, row.bw) << where;
+        ASSERT_EQ(layout.blocks.size(), row.entries.size()) << where;
+        for (size_t b = 0; b < row.entries.size(); ++b)
+            EXPECT_EQ(layout.blocks[b].k.size(), row.entries[b]) << where << " field " << b;
+        EXPECT_EQ(layout.blocks[0].measured.size(), 52u) << where;
+        if (row.htMeasured)
+        {
+            EXPECT_EQ(layout.blocks[1].measured.size(), row.htMeasured) << where;
+        }
+        // The L-LTF sits on the primary 20 MHz: the upper half of the 40 MHz channel when the
+        // secondary one is below (2), the lower half when above (1).
+        if (row.secondary == 2)
+        {
+            EXPECT_EQ(layout.blocks[0].measured.front(), 32 - 26) << where;
+        }
+        if (row.secondary == 1)
+        {
+            EXPECT_EQ(layout.blocks[0].measured.back(), -32 + 26) << where;
+        }
+
+        CObservationWiFiCSI obs;
+        std::string why;
+        ASSERT_TRUE(esp32::toObservation(l, obs, why)) << where << ": " << why;
+        EXPECT_EQ(obs.nTx, row.stbc && row.sigMode == 1 ? 2 : 1) << where;
+        EXPECT_EQ(obs.chanspec.bandwidthMHz, row.bw) << where;
+        if (row.secondary == 2)
+        {
+            EXPECT_EQ(obs.chanspec.asBroadcomString(), "6/40") << where;
+        }
+    }
+    // A length the table doesn't give (an LTF disabled in wifi_csi_config_t): the L-LTF only.
+    esp32::Esp32Line l;
+    l.hasPacketInfo = true;
+    l.sigMode = 1;
+    l.values.assign(200, 1);
+    const auto layout = esp32::bufferLayout(l);
+    EXPECT_FALSE(layout.matchedTable);
+    ASSERT_EQ(layout.blocks.size(), 1u);
+    EXPECT_EQ(layout.blocks[0].kind, esp32::LtfBlock::Kind::LLTF);
+}
+
+// --------------------------------------------------------------------------- Atheros
+// The first 8 records of a public Atheros CSI Tool log against the tool's own reader
+// (read_log_file + read_csi, run in Octave; it returns the first 6): every value equal.
+TEST(Atheros, MatchesTheCsiToolsReader)
+{
+    CsiDecodeSummary s;
+    const auto frames = decodeAll(data("atheros/ath_csi_1.first8.dat"), "auto", &s);
+    EXPECT_EQ(s.format, "atheros");
+    ASSERT_EQ(frames.size(), 8u);
+    const auto ref = readCsv(data("atheros/ath_csi_1.first8.reference.csv"));
+    const auto meta = readCsv(data("atheros/ath_csi_1.first8.reference_meta.csv"));
+    ASSERT_EQ(meta.size(), 6u);
+    ASSERT_EQ(ref.size(), 6u * 3 * 2 * 56);
+    std::map<std::array<int, 4>, Complex> expected;  // record, rx, tx, tone
+    for (const auto& r : ref)
+        expected[{int(r[0]), int(r[1]), int(r[2]), int(r[3])}] = Complex(float(r[4]), float(r[5]));
+    const auto& ks = atheros::toneSubcarriers(56);
+    for (size_t i = 0; i < meta.size(); ++i)
+    {
+        const auto& f = *frames[i];
+        EXPECT_EQ(f.source, "ar9300");
+        EXPECT_EQ(f.nRx, 3);
+        EXPECT_EQ(f.nTx, 2);
+        EXPECT_TRUE(f.isComplete());
+        EXPECT_EQ(f.chanspec.asString(), "6/20");
+        EXPECT_EQ(f.dataSubcarriers().size(), 56u);
+        EXPECT_NEAR(mrpt::Clock::toDouble(f.timestamp), meta[i][1] * 1e-6, 1e-6);
+        ASSERT_EQ(f.antennaRssi_dB.size(), 3u);
+        EXPECT_EQ(f.antennaRssi_dB[0], float(meta[i][10]));
+        EXPECT_EQ(f.antennaRssi_dB[2], float(meta[i][12]));
+        for (unsigned tx = 0; tx < 2; ++tx)
+            for (unsigned rx = 0; rx < 3; ++rx)
+            {
+                std::vector<Complex> ours, theirs;
+                for (unsigned t = 0; t < 56; ++t)
+                {
+                    const Complex want = expected.at({int(i), int(rx), int(tx), int(t)});
+                    const Complex got = f.at(tx, rx, subcarrierToBin(ks[t], 64));
+                    EXPECT_EQ(got, want)
+                        << "record " << i << " rx " << rx << " tx " << tx << " tone " << t;
+                    ours.push_back(got);
+                    theirs.push_back(want);
+                }
+                EXPECT_GE(correlation(ours, theirs), 0.9999);
+            }
     }
 }
 
@@ -324,6 +501,7 @@ TEST(CsiDecoders, DetectedByContentNotByName)
         {"nexmon/bcm4358-80mhz.pcap", "nexmon"},
         {"intel5300/log.all_csi.6.7.6.dat", "intel5300"},
         {"esp32/csi_data.csv", "esp32"},
+        {"atheros/ath_csi_1.first8.dat", "atheros"},
         {"rawlog/v0-bcm4366c0.rawlog", "rawlog"}};
     for (const auto& [file, format] : samples)
     {
@@ -336,7 +514,7 @@ TEST(CsiDecoders, DetectedByContentNotByName)
     std::ofstream(tmp.file("junk.bin")) << "hello, this is no CSI at all\n";
     EXPECT_THROW(CsiDecoderRegistry::instance().detect(tmp.file("junk.bin")), std::runtime_error);
     CsiDecodeOptions o;
-    EXPECT_THROW(applyFormatOption("atheros", o), std::invalid_argument);
+    EXPECT_THROW(applyFormatOption("picoscenes", o), std::invalid_argument);
     EXPECT_EQ(applyFormatOption("ubilocate", o), "nexmon");
     EXPECT_EQ(o.assembler.format, nexmon::FormatHint::UbiLocate);
 }
@@ -503,7 +681,8 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
 {
     test::TempDir tmp;
     for (const char* file :
-         {"intel5300/log.all_csi.6.7.6.dat", "esp32/csi_data.csv", "nexmon/bcm43455c0-80mhz.pcap"})
+         {"intel5300/log.all_csi.6.7.6.dat", "esp32/csi_data.csv", "nexmon/bcm43455c0-80mhz.pcap",
+          "atheros/ath_csi_1.first8.dat"})
     {
         const std::string rawlog = tmp.file("out.rawlog");
         const auto imp = test::run(test::binDir() + "/csi-import -q " + data(file) + " " + rawlog);
@@ -531,3 +710,31 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
 }
 
 }  // namespace
+
+TEST(Atheros, BadRecordsNameFileOffsetAndFormat)
+{
+    test::TempDir tmp;
+    const std::string text = test::readFile(data("atheros/ath_csi_1.first8.dat"));
+    // Truncated in the third record (each record is 2 + 1905 bytes): two frames stay.
+    const std::string cut = tmp.file("cut.dat");
+    std::ofstream(cut, std::ios::binary) << text.substr(0, 2 * 1907 + 900);
+    std::vector<CObservationWiFiCSI::Ptr> got;
+    const auto e = expectDecodeError(
+        [&] {
+            decodeCsiFile(
+                cut, "atheros", {}, [&](CObservationWiFiCSI::Ptr&& f) { got.push_back(f); });
+        });
+    EXPECT_EQ(got.size(), 2u);
+    EXPECT_EQ(e.offset, 2u * 1907);
+    EXPECT_EQ(e.format, "atheros");
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+    // Impossible antenna count in the second record's status (nr at byte 2 + 17).
+    std::string bad = text;
+    bad[1907 + 2 + 17] = 7;
+    const std::string badPath = tmp.file("bad.dat");
+    std::ofstream(badPath, std::ios::binary) << bad;
+    const auto e2 =
+        expectDecodeError([&] { decodeCsiFile(badPath, "atheros", {}, [](auto&&) {}); });
+    EXPECT_EQ(e2.offset, 1907u);
+    EXPECT_NE(std::string(e2.what()).find("nr=7"), std::string::npos) << e2.what();
+}

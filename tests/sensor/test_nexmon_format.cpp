@@ -155,8 +155,11 @@ TEST(NexmonHeader, EveryMalformedDatagramHasItsReason)
     d[16] = 0x45, d[17] = 0x43;  // another chip
     EXPECT_EQ(reasonFor(d), RejectReason::UnknownChip);
     d = good;
-    d[15] = 0xe8;  // 160 MHz
+    d[15] = 0xe8;  // 160 MHz centred on 155: no such channel
     EXPECT_EQ(reasonFor(d), RejectReason::BadChanspec);
+    d = good;
+    d[14] = 0x32, d[15] = 0xe8;  // 50/160: a real channel, but 512 words expected, 256 present
+    EXPECT_EQ(reasonFor(d), RejectReason::SizeMismatch);
     d = good;
     d.pop_back();
     EXPECT_EQ(reasonFor(d), RejectReason::SizeMismatch);

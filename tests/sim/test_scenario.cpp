@@ -119,7 +119,7 @@ TEST(Scenario, TransmitterOutsideTheRoom)
 
 TEST(Scenario, ImpossibleChannels)
 {
-    for (const char* ch : {"200/80", "6/80", "36/160", "abc", "155/"})
+    for (const char* ch : {"200/80", "6/80", "155/160", "6/160", "abc", "155/"})
     {
         const auto e =
             loadError(replaced(kValid, "channel: 155/80", std::string("channel: ") + ch));

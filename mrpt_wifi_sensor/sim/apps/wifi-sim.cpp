@@ -58,6 +58,12 @@ int main(int argc, char** argv)
                 "Instead of a scenario file, random room number SEED (share/scenarios/README.md, "
                 "'Random rooms'; seeds < 1000 are for development, >= 1000 for evaluation)",
                 false, 0, "SEED", cmd);
+            TCLAP::ValueArg<std::string> argReceiver(
+                "", "receiver",
+                "With --random-room: the robot's receiver, rt-ac86u (default: 4 antennas, 155/80, "
+                "every bin) or intel5300 (share/arrays/intel5300-linear-3.yaml, 159/40, the Intel "
+                "5300's 30 grouped subcarriers as int8, source iwl5300)",
+                false, "rt-ac86u", "NAME", cmd);
             TCLAP::ValueArg<std::string> argWriteScenario(
                 "", "write-scenario", "With --random-room: also save the room as a scenario file",
                 false, "", "FILE.yaml", cmd);
@@ -92,6 +98,14 @@ int main(int argc, char** argv)
                         : "expected SCENARIO.yaml OUT.rawlog (or --random-room SEED OUT.rawlog)");
             if (argWriteScenario.isSet() && !argRandomRoom.isSet())
                 throw std::invalid_argument("--write-scenario needs --random-room");
+            if (argReceiver.isSet() && !argRandomRoom.isSet())
+                throw std::invalid_argument(
+                    "--receiver needs --random-room (a scenario file sets receiver.array and "
+                    "receiver.csi_format)");
+            if (!sim::isRandomRoomReceiver(argReceiver.getValue()))
+                throw std::invalid_argument(
+                    "--receiver: unknown receiver '" + argReceiver.getValue() +
+                    "' (rt-ac86u or intel5300)");
             const std::string outPath = files.back();
             std::string scenarioName;
             sim::Scenario scenario;
@@ -101,6 +115,7 @@ int main(int argc, char** argv)
                     throw std::invalid_argument("--random-room: seeds start at 1");
                 sim::RandomRoomOptions ro;
                 ro.arraysDir = arraysDir();
+                ro.receiver = argReceiver.getValue();
                 const std::string yaml = sim::randomRoomYaml(argRandomRoom.getValue(), ro);
                 scenario = sim::Scenario::fromYamlText(
                     yaml, "random-room-" + std::to_string(argRandomRoom.getValue()));
@@ -127,6 +142,10 @@ int main(int argc, char** argv)
             }
             if (argCompression.getValue() < 0 || argCompression.getValue() > 9)
                 throw std::invalid_argument("--compression must be 0..9");
+            if (argPcap.isSet() && scenario.receiver.csiFormat != sim::CsiFormat::Nexmon)
+                throw std::invalid_argument(
+                    std::string("--pcap writes Nexmon datagrams; the receiver reports ") +
+                    sim::toString(scenario.receiver.csiFormat) + " CSI (write the rawlog only)");
             sim::Simulator simulator(scenario);
 
             mrpt::io::CFileGZOutputStream out;

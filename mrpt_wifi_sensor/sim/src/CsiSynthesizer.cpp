@@ -19,6 +19,8 @@ int CsiSynthesizer::occupiedEdge(unsigned bandwidthMHz)
             return 58;
         case 80:
             return 122;
+        case 160:
+            return 250;
         default:
             throw std::invalid_argument(
                 "no occupied-band table for " + std::to_string(bandwidthMHz) + " MHz");

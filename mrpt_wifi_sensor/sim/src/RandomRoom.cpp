@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "CounterRng.h"
 
@@ -28,8 +29,17 @@ std::string pt(const Point& p)
 }
 }  // namespace
 
+bool isRandomRoomReceiver(const std::string& name)
+{
+    return name == "rt-ac86u" || name == "intel5300";
+}
+
 std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
 {
+    if (!isRandomRoomReceiver(options.receiver))
+        throw std::invalid_argument(
+            "unknown random-room receiver '" + options.receiver + "' (rt-ac86u or intel5300)");
+    const bool intel = options.receiver == "intel5300";
     mrpt::random::CRandomGenerator rng(detail::seed32(detail::hashKey({seed, kTagRandomRoom})));
     auto U = [&](double a, double b) { return rng.drawUniform(a, b); };
     auto I = [&](int a, int b) { return int(std::floor(rng.drawUniform(a, b + 1 - 1e-9))); };
@@ -110,13 +120,14 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
           << std::dec << std::setfill(' ') << "'\n"
           << "    position: " << pt(p) << "\n"
           << "    yaw_deg: " << inward + U(-60, 60) << "\n"
-          << "    channel: 155/80\n"
+          << "    channel: " << (intel ? "159/40" : "155/80") << "\n"
           << "    streams: " << (two ? 2 : 1) << "\n";
         if (two) y << "    array: " << options.arraysDir << "/ap-linear-2.yaml\n";
         y << "    frame_rate_hz: 50\n";
     }
 
-    y << "\nreceiver:\n  label: WIFI_CSI\n  array: " << options.arraysDir << "/rt-ac86u.yaml\n"
+    y << "\nreceiver:\n  label: WIFI_CSI\n  array: " << options.arraysDir
+      << (intel ? "/intel5300-linear-3.yaml\n  csi_format: intel5300\n" : "/rt-ac86u.yaml\n")
       << "  sensor_pose: {x: 0.1, y: 0.0, z: 0.4, yaw_deg: 0}\n"
       << "  body_shadow: {center_deg: 180, width_deg: " << U(60, 140)
       << ", attenuation_db: " << U(3, 8) << "}\n\n";

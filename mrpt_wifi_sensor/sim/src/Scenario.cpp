@@ -81,6 +81,18 @@ const char* toString(MotionType t)
     return "unknown";
 }
 
+const char* toString(CsiFormat f)
+{
+    switch (f)
+    {
+        case CsiFormat::Nexmon:
+            return "nexmon";
+        case CsiFormat::Intel5300:
+            return "intel5300";
+    }
+    return "unknown";
+}
+
 ImpairmentSpec ImpairmentSpec::ideal()
 {
     ImpairmentSpec s;
@@ -199,9 +211,14 @@ struct Reader
     {
         n.allowOnly(
             {"label", "array", "sensor_pose", "noise_figure_db", "antenna_gain_dbi", "chip_id",
-             "body_shadow"});
+             "body_shadow", "csi_format"});
         ReceiverSpec r;
         r.sensorLabel = n.stringOr("label", r.sensorLabel);
+        const std::string format = n.stringOr("csi_format", toString(r.csiFormat));
+        if (format == toString(CsiFormat::Intel5300))
+            r.csiFormat = CsiFormat::Intel5300;
+        else if (format != toString(CsiFormat::Nexmon))
+            n["csi_format"].fail("unknown format '" + format + "' (nexmon or intel5300)");
         r.array = array(n["array"]);
         if (auto sp = n.get("sensor_pose"))
         {
@@ -534,6 +551,23 @@ void Scenario::validate() const
         fail(
             "receiver.array", "the receiver needs 1.." +
                                   std::to_string(CObservationWiFiCSI::kMaxChains) + " elements");
+    if (receiver.csiFormat == CsiFormat::Intel5300)
+    {
+        if (nRx > 3)
+            fail("receiver.array", "csi_format intel5300: the 5300 has at most 3 antennas");
+        for (size_t i = 0; i < transmitters.size(); ++i)
+        {
+            const auto& t = transmitters[i];
+            if (t.chanspec.bandwidthMHz > 40)
+                fail(
+                    "transmitters[" + std::to_string(i) + "].channel",
+                    "csi_format intel5300 reports 20 or 40 MHz only, not " + t.chanspec.asString());
+            if (t.streams > 3)
+                fail(
+                    "transmitters[" + std::to_string(i) + "].streams",
+                    "csi_format intel5300: at most 3 streams");
+        }
+    }
 
     const auto& m = motion;
     if (!insideRoom({m.start.x, m.start.y}))

@@ -391,7 +391,9 @@ void Simulator::synthesizeFrame(
         for (unsigned bin = 0; bin < nfft; ++bin)
         {
             std::complex<float> v = std::complex<float>(f) * chains[size_t(i) * nfft + bin];
-            if (imp.lowerSubbandSignFlip && cs.bandwidthMHz == 80 && bin < 64) v = -v;
+            if (imp.lowerSubbandSignFlip &&
+                inNegatedSubband(binToSubcarrier(bin, nfft), cs.bandwidthMHz))
+                v = -v;
             rxFactors_[size_t(i) * nfft + bin] = v;
             f *= step;
         }
@@ -413,6 +415,7 @@ void Simulator::synthesizeFrame(
     out.headerVariant = NexmonHeaderVariant::Nexmon;
     out.routerAddress = "sim";
     out.maskedBins.clear();
+    out.subcarrierIndices.clear();
     out.resize(nTx, nRx, nfft);
 
     const double noiseRms = std::sqrt(noisePower);  // before the receive chain's gains
@@ -447,6 +450,12 @@ void Simulator::synthesizeFrame(
                 chainScale, nfft, noiseScratchRe_.data(), noiseScratchIm_.data(), out.pair(m, i));
         }
 
+    if (rxSpec.csiFormat == CsiFormat::Intel5300)
+    {
+        toIntel5300(out);
+        return;
+    }
+
     // The firmware writes PHY status words over a few bins: garbage of data-like magnitude.
     if (imp.firmwareOverwrittenBins)
         for (int k : firmwareOverwrittenSubcarriers(cs.bandwidthMHz))
@@ -458,6 +467,37 @@ void Simulator::synthesizeFrame(
                     out.at(m, i, subcarrierToBin(k, nfft)) =
                         std::complex<float>(std::polar(mag, rng.uniform(-M_PI, M_PI)));
                 }
+}
+
+void Simulator::toIntel5300(CObservationWiFiCSI& out)
+{
+    // What the CSI Tool reports: the 30 grouped subcarriers, int8 I/Q. The scale puts the RMS
+    // of a complex value at 20, as in the tool's logs; the rounding is the quantisation noise.
+    constexpr double kRms = 20.0;
+    const unsigned nfft = out.nfft();
+    const auto& ks = htGroupedSubcarriers(out.chanspec.bandwidthMHz);
+    double power = 0;
+    for (unsigned m = 0; m < out.nTx; ++m)
+        for (unsigned i = 0; i < out.nRx; ++i)
+            for (int k : ks) power += std::norm(out.at(m, i, subcarrierToBin(k, nfft)));
+    power /= double(out.nTx * out.nRx * ks.size());
+    const float scale = power > 0 ? float(kRms / std::sqrt(power)) : 0.f;
+    const auto q = [](float x) { return std::clamp(std::round(x), -128.f, 127.f); };
+    for (unsigned m = 0; m < out.nTx; ++m)
+        for (unsigned i = 0; i < out.nRx; ++i)
+        {
+            auto* p = out.pair(m, i);
+            intelScratch_.assign(nfft, {0.f, 0.f});
+            for (int k : ks)
+            {
+                const unsigned b = subcarrierToBin(k, nfft);
+                intelScratch_[b] = {q(p[b].real() * scale), q(p[b].imag() * scale)};
+            }
+            std::copy(intelScratch_.begin(), intelScratch_.end(), p);
+        }
+    out.subcarrierIndices.assign(ks.begin(), ks.end());
+    out.source = "iwl5300";
+    out.chipId = 0;
 }
 
 void Simulator::writeImpairmentsJson(std::ostream& o) const

@@ -4,8 +4,10 @@
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 #include <mrpt_wifi/sensor/Esp32CsiFormat.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cstring>
+#include <iterator>
 
 namespace mrpt_wifi::esp32
 {
@@ -102,6 +104,18 @@ bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
         if (!field(unsigned(iAgc), l.agcGain, "agc_gain")) return false;
         l.hasAgc = true;
     }
+    if (l.metadataFields != 14)
+    {
+        // sig_mode, cwb and stbc sit at 5, 7 and 11 in both the esp-csi and the
+        // ESP32-CSI-Tool layouts; first_word_invalid only in esp-csi's (the last field).
+        unsigned fwi = 0;
+        if (!field(5, l.sigMode, "sig_mode") || !field(7, l.cwb, "cwb") ||
+            !field(11, l.stbc, "stbc") ||
+            (l.metadataFields == 24 && !field(23, fwi, "first_word_invalid")))
+            return false;
+        l.hasPacketInfo = true;
+        l.firstWordInvalid = fwi != 0;
+    }
     std::string_view data = line.substr(open + 1, close - open - 1);
     while (!data.empty())
     {
@@ -128,19 +142,106 @@ bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
     return true;
 }
 
+const char* toString(LtfBlock::Kind k)
+{
+    switch (k)
+    {
+        case LtfBlock::Kind::LLTF:
+            return "L-LTF";
+        case LtfBlock::Kind::HTLTF:
+            return "HT-LTF";
+        case LtfBlock::Kind::STBC_HTLTF:
+            return "STBC-HT-LTF";
+    }
+    return "?";
+}
+
+namespace
+{
+std::vector<int> span(int from, int to)
+{
+    std::vector<int> v;
+    for (int k = from; k <= to; ++k) v.push_back(k);
+    return v;
+}
+std::vector<int> concat(std::vector<int> a, const std::vector<int>& b)
+{
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+/** ±lo..±hi around `centre`, ascending. */
+std::vector<int> bandAround(int centre, int lo, int hi)
+{
+    std::vector<int> v;
+    for (int k = -hi; k <= hi; ++k)
+        if (std::abs(k) >= lo) v.push_back(centre + k);
+    return v;
+}
+}  // namespace
+
+BufferLayout bufferLayout(const Esp32Line& l)
+{
+    // wifi_second_chan_t: 0 none, 1 above, 2 below. With a secondary channel the fields are
+    // indexed on the 40 MHz FFT; the primary 20 MHz is its upper half (below) or lower half.
+    BufferLayout out;
+    const int secondary = l.secondaryChannel;
+    const bool none = secondary != 1 && secondary != 2;
+    out.bandwidthMHz = none ? 20 : 40;
+    out.primaryOffset = none ? 0 : secondary == 2 ? 32 : -32;
+    const std::vector<int> fft64 = concat(span(0, 31), span(-32, -1));
+    const std::vector<int> lltf = none ? fft64 : secondary == 2 ? span(0, 63) : span(-64, -1);
+
+    std::vector<std::pair<LtfBlock::Kind, std::vector<int>>> fields = {
+        {LtfBlock::Kind::LLTF, lltf}};
+    const bool ht = l.hasPacketInfo && l.sigMode == 1;
+    if (ht)
+    {
+        std::vector<int> htltf;
+        const bool stbc = l.stbc != 0;
+        if (none)
+            htltf = fft64;
+        else if (l.cwb == 1)
+            htltf = stbc ? concat(span(0, 60), span(-60, -1)) : concat(span(0, 63), span(-64, -1));
+        else if (secondary == 2)
+            htltf = stbc ? span(0, 62) : span(0, 63);
+        else
+            htltf = stbc ? span(-62, -1) : span(-64, -1);
+        fields.push_back({LtfBlock::Kind::HTLTF, htltf});
+        if (stbc) fields.push_back({LtfBlock::Kind::STBC_HTLTF, htltf});
+    }
+    size_t entries = 0;
+    for (const auto& f : fields) entries += f.second.size();
+    out.matchedTable = l.hasPacketInfo && (l.sigMode == 0 || ht) && 2 * entries == l.values.size();
+    if (!out.matchedTable) fields.resize(1);  // the L-LTF leads whenever it is enabled
+
+    const bool ht40 = !none && l.cwb == 1;
+    size_t first = 0;
+    for (auto& [kind, ks] : fields)
+    {
+        LtfBlock b;
+        b.kind = kind;
+        b.firstEntry = first;
+        b.k = ks;
+        first += ks.size();
+        const std::vector<int> band = kind == LtfBlock::Kind::LLTF
+                                          ? bandAround(out.primaryOffset, 1, 26)
+                                      : ht40 ? bandAround(0, 2, 58)
+                                             : bandAround(out.primaryOffset, 1, 28);
+        for (int k : band)
+            if (std::find(ks.begin(), ks.end(), k) != ks.end()) b.measured.push_back(k);
+        out.blocks.push_back(std::move(b));
+    }
+    return out;
+}
+
 const std::vector<int>& lltfSubcarriers()
 {
-    static const std::vector<int> ks = []
-    {
-        std::vector<int> v;
-        for (int k = -26; k <= 26; ++k)
-            if (k) v.push_back(k);
-        return v;
-    }();
+    static const std::vector<int> ks = bandAround(0, 1, 26);
     return ks;
 }
 
-bool toObservation(const Esp32Line& l, CObservationWiFiCSI& obs, std::string& why)
+bool toObservation(
+    const Esp32Line& l, CObservationWiFiCSI& obs, std::string& why, bool legacyLtfOnly)
 {
     if (l.values.size() < kLltfValues)
     {
@@ -148,15 +249,28 @@ bool toObservation(const Esp32Line& l, CObservationWiFiCSI& obs, std::string& wh
               std::to_string(kLltfValues) + ")";
         return false;
     }
+    const BufferLayout layout = bufferLayout(l);
     try
     {
-        obs.chanspec = Chanspec::make(l.channel, 20);
+        if (layout.bandwidthMHz == 20)
+            obs.chanspec = Chanspec::make(l.channel, 20);
+        else  // centre 2 channel numbers towards the secondary; sideband of the primary
+            obs.chanspec = Chanspec::make(
+                unsigned(int(l.channel) + (layout.primaryOffset > 0 ? -2 : 2)), 40,
+                layout.primaryOffset > 0 ? 1 : 0);
     }
     catch (const std::exception&)
     {
-        why = "channel " + std::to_string(l.channel) + " does not exist";
+        why = "channel " + std::to_string(l.channel) + " (secondary " +
+              std::to_string(l.secondaryChannel) + ") does not exist";
         return false;
     }
+    // The HT-LTF (and STBC's second one) when the line has them, else the L-LTF.
+    std::vector<const LtfBlock*> used;
+    for (const auto& b : layout.blocks)
+        if (b.kind != LtfBlock::Kind::LLTF && !legacyLtfOnly) used.push_back(&b);
+    if (used.empty()) used.push_back(&layout.blocks.front());
+
     obs.source = "esp32";
     obs.transmitter = l.mac;
     obs.rssi_dBm = int8_t(std::clamp(l.rssi, -128, 127));
@@ -164,12 +278,39 @@ bool toObservation(const Esp32Line& l, CObservationWiFiCSI& obs, std::string& wh
     obs.noiseFloor_dBm = float(l.noiseFloor);
     if (l.hasAgc) obs.agc_dB = float(l.agcGain);
     obs.firmwareCounter = uint16_t(l.seq);
-    obs.resize(1, 1, 64);
-    for (unsigned i = 0; i < 64; ++i)
-        obs.at(0, 0, (i + 32) & 63) = {float(l.values[2 * i + 1]), float(l.values[2 * i])};
-    const auto& ks = lltfSubcarriers();
-    obs.subcarrierIndices.assign(ks.begin(), ks.end());
-    obs.setPresent(0, 0);
+    const unsigned nfft = obs.chanspec.nfft();
+    obs.resize(unsigned(used.size()), 1, nfft);
+    obs.maskedBins.clear();
+    std::vector<int> measured = used.front()->measured;
+    for (unsigned m = 0; m < used.size(); ++m)
+    {
+        const LtfBlock& b = *used[m];
+        for (size_t i = 0; i < b.k.size(); ++i)
+        {
+            const size_t e = b.firstEntry + i;
+            obs.at(m, 0, subcarrierToBin(b.k[i], nfft)) = {
+                float(l.values[2 * e + 1]), float(l.values[2 * e])};
+        }
+        std::vector<int> both;
+        std::set_intersection(
+            measured.begin(), measured.end(), b.measured.begin(), b.measured.end(),
+            std::back_inserter(both));
+        measured.swap(both);
+        obs.setPresent(m, 0);
+    }
+    // ESP-IDF: with first_word_invalid the buffer's first four bytes (two entries, in the
+    // leading L-LTF) are not CSI: kept as reported, but masked and not listed as measured.
+    if (l.firstWordInvalid && used.front()->firstEntry == 0)
+        for (size_t e = 0; e < 2; ++e)
+        {
+            const int k = used.front()->k[e];
+            const auto it = std::find(measured.begin(), measured.end(), k);
+            if (it == measured.end()) continue;
+            measured.erase(it);
+            obs.maskedBins.push_back(uint16_t(subcarrierToBin(k, nfft)));
+        }
+    std::sort(obs.maskedBins.begin(), obs.maskedBins.end());
+    obs.subcarrierIndices.assign(measured.begin(), measured.end());
     return true;
 }
 
@@ -181,8 +322,8 @@ public:
     std::string name() const override { return "esp32"; }
     std::string description() const override
     {
-        return "esp-csi CSI_DATA text lines (ESP32 serial log / .csv): 1 antenna, the L-LTF of "
-               "the primary 20 MHz channel";
+        return "esp-csi CSI_DATA text lines (ESP32 serial log / .csv): 1 antenna; the HT-LTF "
+               "(and STBC's second) when the line has one, else the L-LTF; 20 or 40 MHz";
     }
     int probe(const uint8_t* head, size_t len) const override
     {
@@ -204,6 +345,7 @@ public:
         const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
         ProgressThrottle progress(onProgress);
         size_t pos = 0, lineNo = 0;
+        uint64_t stbcLines = 0, wideLines = 0, htLines = 0;
         while (pos < text.size())
         {
             size_t eol = text.find('\n', pos);
@@ -216,7 +358,8 @@ public:
                 Esp32Line l;
                 std::string why;
                 auto obs = CObservationWiFiCSI::Create();
-                if (!parseLine(line, l, why) || !toObservation(l, *obs, why))
+                if (!parseLine(line, l, why) ||
+                    !toObservation(l, *obs, why, options.esp32LegacyLtf))
                     throw CsiDecodeError(
                         path, pos, name(), "line " + std::to_string(lineNo) + ": " + why);
                 obs->sensorLabel = options.assembler.sensorLabel;
@@ -225,6 +368,10 @@ public:
                 // The device's µs clock since boot, not wall time.
                 obs->timestamp = mrpt::Clock::fromDouble(double(l.localTimestamp_us) * 1e-6);
                 ++summary.frames;
+                // More than the L-LTF's 52 subcarriers: an HT-LTF (56 or 114).
+                htLines += obs->subcarrierIndices.size() > 52;
+                stbcLines += obs->nTx > 1;
+                wideLines += obs->chanspec.bandwidthMHz == 40;
                 onFrame(std::move(obs));
             }
             else if (!line.empty() && line != "\r")
@@ -233,6 +380,11 @@ public:
             progress.update(pos, text.size());
         }
         progress.update(1, 1);
+        summary.details += "esp32: " + std::to_string(htLines) + " frames from the HT-LTF (" +
+                           std::to_string(stbcLines) + " with STBC: 2 space-time streams), " +
+                           std::to_string(summary.frames - htLines) + " from the L-LTF" +
+                           (options.esp32LegacyLtf ? " (--esp32-lltf)" : "") + "; " +
+                           std::to_string(wideLines) + " on a 40 MHz channel";
     }
 };
 }  // namespace

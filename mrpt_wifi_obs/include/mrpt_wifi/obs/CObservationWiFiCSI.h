@@ -31,8 +31,8 @@ const char* toString(NexmonHeaderVariant v);
  * mantissa · 2^exponent on the BCM4366c0, the int8 I/Q of an Intel 5300 or an ESP32). Pairs
  * that did not arrive are flagged in `presentMask` and hold zeros.
  *
- * Sources that report only some subcarriers (Intel 5300: 30 grouped ones; ESP32: the L-LTF)
- * list them in `subcarrierIndices`; the other bins hold zeros and dataSubcarriers() returns
+ * Sources that report only some subcarriers (Intel 5300: 30 grouped ones; ESP32: the L-LTF or
+ * HT-LTF) list them in `subcarrierIndices`; the other bins hold zeros and dataSubcarriers() returns
  * that list instead of the bandwidth's standard one. Where the source defines a scaling to
  * physical units (Intel's get_scaled_csi), `scaledCsiFactor` holds it: scaledCsi() = factor ·
  * csi.

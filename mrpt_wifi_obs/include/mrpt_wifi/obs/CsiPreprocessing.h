@@ -25,6 +25,10 @@ struct SubcarrierLayout
     std::vector<uint16_t> bins;          //!< k + NFFT/2
     std::vector<double> frequencies_Hz;  //!< f_c + k·312.5 kHz
     double centerFrequency_Hz = 0;
+    /** The subcarriers are the observation's own list (CObservationWiFiCSI::subcarrierIndices:
+     *  Intel 5300 groups, ESP32 L-LTF / HT-LTF), not the bandwidth's standard data subcarriers;
+     *  the Nexmon-specific steps (sub-band sign, firmware-overwritten bins) don't apply. */
+    bool sourceListed = false;
     size_t size() const { return subcarriers.size(); }
 };
 
@@ -35,6 +39,11 @@ struct PreprocessOptions
     bool correctSubbandSign80 = true;
     /** 40 MHz: multiply k = −64..−1 by −j, as WiROS does. Unverified on hardware: off. */
     bool correctSubbandSign40 = false;
+    /** 160 MHz: the 80 MHz correction per 80 MHz segment (k = −256..−193 and 0..63 by −1,
+     *  inNegatedSubband()). An extrapolation of the verified 80 MHz quirk, not verified on
+     *  hardware (nexmon_csi documents up to 80 MHz); turn off if a real 160 MHz capture shows no
+     *  ~180° step at k = −192 / +64. */
+    bool correctSubbandSign160 = true;
     /** Leave the subcarriers the firmware overwrites with PHY status (k = +2 at 40/80 MHz) out
      *  of the layout: a frame can't tell whether they were repaired. */
     bool excludeFirmwareOverwritten = true;
@@ -132,16 +141,25 @@ public:
      *  the channel but does not fit (another device, too few antennas). */
     RejectReason process(const CObservationWiFiCSI& in, CleanCsi& out);
 
-    /** The layout used for a channel (cached). Throws std::invalid_argument for a bandwidth
-     *  without a data-subcarrier plan. */
+    /** The layout of a channel's standard data subcarriers. Throws std::invalid_argument for a
+     *  bandwidth without a data-subcarrier plan. */
     std::shared_ptr<const SubcarrierLayout> layoutFor(const Chanspec& cs);
+    /** The layout a frame is processed on (cached, shared by every frame with the same channel
+     *  and subcarrier list): the observation's own subcarrier list when it has one (grouped /
+     *  sparse sources), else the standard one. Throws std::invalid_argument for a list with
+     *  indices outside the bandwidth or not strictly ascending. */
+    std::shared_ptr<const SubcarrierLayout> layoutFor(const CObservationWiFiCSI& in);
 
     /** Checks before any processing that the array and the calibration fit a frame of this
      *  shape; throws CalibrationError / std::invalid_argument with a clear message. */
     void checkCompatible(const Chanspec& cs, unsigned nRx);
 
-    /** Per-packet phase slope across subcarriers [rad per subcarrier], from the lag-one
-     *  products summed over the given rows (robust: no unwrapping). Exposed for tests. */
+    /** Per-packet phase slope across subcarriers [rad per subcarrier index], from the products
+     *  of neighbouring subcarriers summed over the given rows (robust: no unwrapping). Sparse
+     *  layouts (e.g. Intel's groups of 2 or 4): the most common spacing gives the slope modulo
+     *  2π/spacing, the other spacings refine it by least squares on their phase differences.
+     *  Unambiguous up to π/spacing rad per subcarrier (400 ns of delay at spacing 4). Exposed
+     *  for tests. */
     static double estimatePhaseSlope(
         const Eigen::Ref<const Eigen::MatrixXcf>& H, const std::vector<int>& k);
 
@@ -155,7 +173,7 @@ private:
         Eigen::VectorXf signImag;             //!< imaginary part (the 40 MHz −j case)
         bool hasSignCorrection = false;
     };
-    ChannelCache& cacheFor(const Chanspec& cs, unsigned nRx);
+    ChannelCache& cacheFor(const std::shared_ptr<const SubcarrierLayout>& layout, unsigned nRx);
     struct TransmitterCache
     {
         const PhaseCalibration* calibration = nullptr;
@@ -168,7 +186,12 @@ private:
     PreprocessOptions options_;
     AntennaArray rxArray_;
     CalibrationStore calib_;
-    std::map<uint32_t, ChannelCache> caches_;
+    std::map<std::pair<const SubcarrierLayout*, unsigned>, ChannelCache> caches_;
+    /** Layouts by (centre channel << 16 | bandwidth, the observation's subcarrier list). */
+    std::map<std::pair<uint32_t, std::vector<int16_t>>, std::shared_ptr<const SubcarrierLayout>>
+        layouts_;
+    std::pair<uint32_t, std::vector<int16_t>> lastLayoutKey_;  //!< of lastLayout_
+    std::shared_ptr<const SubcarrierLayout> lastLayout_;
 };
 
 /** The recent frames of one transmitter: a ring of CleanCsi, storage reused. Frames of another

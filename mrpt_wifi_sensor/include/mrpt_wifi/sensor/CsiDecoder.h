@@ -22,6 +22,9 @@ struct CsiDecodeOptions
     /** Channel for formats whose records don't carry one (Intel 5300 .dat). When unset the
      *  decoder assumes one and says so in the summary notes. */
     std::optional<Chanspec> chanspec;
+    /** ESP32 lines: keep the L-LTF even when the line also has an HT-LTF (by default the
+     *  HT-LTF, and with STBC the second space-time stream's, is what the frame holds). */
+    bool esp32LegacyLtf = false;
 };
 
 /** What a decode went through. */

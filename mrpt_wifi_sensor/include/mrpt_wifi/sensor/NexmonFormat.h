@@ -36,7 +36,8 @@ const char* toString(Chip c);
 bool chipFromWord(uint16_t word, Chip& out);
 /** Receive cores the chip has. */
 unsigned chipCores(Chip c);
-/** Bandwidths [MHz] nexmon_csi supports on the chip (20/40/80 on all four). */
+/** Bandwidths [MHz] decoded for the chip: 20/40/80 on all four (nexmon_csi), 160 on the
+ *  BCM4366c0 (its radio's widest mode; not documented by nexmon_csi). */
 bool chipSupportsBandwidth(Chip c, unsigned bandwidthMHz);
 constexpr uint16_t kDefaultUdpPort = 5500;
 constexpr unsigned kMaxCores = 4;    //!< receive chains of the 4366c0

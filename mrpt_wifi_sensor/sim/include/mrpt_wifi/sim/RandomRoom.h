@@ -22,7 +22,14 @@ struct RandomRoomOptions
     double duration_s = 60.0;
     /** Folder holding rt-ac86u.yaml and ap-linear-2.yaml (share/arrays). */
     std::string arraysDir;
+    /** The receiver (its array file in arraysDir, channel of the APs, CSI format):
+     *  "rt-ac86u" (155/80, every bin) or "intel5300" (intel5300-linear-3.yaml, 159/40, the 30
+     *  grouped subcarriers as int8). The room itself does not depend on it. */
+    std::string receiver = "rt-ac86u";
 };
+
+/** The receivers randomRoomYaml() knows ("rt-ac86u", "intel5300"). */
+bool isRandomRoomReceiver(const std::string& name);
 
 /** A random office-like room as scenario YAML text (share/scenarios/README.md, "Random rooms",
  *  documents the distribution): a 6–14 × 5–10 m rectangle with walls of random reflectivity,

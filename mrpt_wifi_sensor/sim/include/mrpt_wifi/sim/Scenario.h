@@ -81,9 +81,21 @@ struct TransmitterSpec
 };
 
 /** The robot's receiver: array, where it sits on the robot, front-end noise. */
+/** What the simulated receiver reports, as a real capture would arrive. */
+enum class CsiFormat : uint8_t
+{
+    Nexmon = 0,    //!< every bin of the bandwidth (BCM4366c0 / Nexmon)
+    Intel5300 = 1  //!< 30 grouped subcarriers (htGroupedSubcarriers), int8 I/Q, source "iwl5300"
+};
+const char* toString(CsiFormat f);
+
 struct ReceiverSpec
 {
     std::string sensorLabel = "WIFI_CSI";
+    /** Intel5300: the CSI is kept on the 802.11n grouped subcarriers only (Ng = 2 at 20 MHz,
+     *  Ng = 4 at 40 MHz; listed in subcarrierIndices, other bins zero), quantised to int8 I/Q at
+     *  an RMS of 20 per component pair like the CSI Tool's values; 20/40 MHz, ≤ 3 antennas. */
+    CsiFormat csiFormat = CsiFormat::Nexmon;
     AntennaArray array;
     /** Array pose on the robot; the simulation is planar and uses x, y, yaw (z is kept). */
     mrpt::poses::CPose3D sensorPose;

@@ -149,6 +149,9 @@ private:
     std::vector<std::complex<float>> ideal_;
     std::vector<std::complex<float>> rxFactors_;
     std::vector<std::complex<float>> txScratch_;
+    std::vector<std::complex<float>> intelScratch_;
+    /** ReceiverSpec::csiFormat Intel5300: keep the grouped subcarriers, quantise to int8. */
+    void toIntel5300(CObservationWiFiCSI& out);
     std::vector<uint32_t> noiseTableRe_, noiseTableIm_;  // float bits, see Simulator.cpp
     std::vector<uint32_t> noiseScratchRe_, noiseScratchIm_;
 };
