@@ -4,6 +4,7 @@
 #include <mrpt_wifi/obs/Subcarriers.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace mrpt_wifi
@@ -33,6 +34,22 @@ const char* toString(RejectReason r)
 }
 
 // ---------------------------------------------------------------------------------------------
+namespace
+{
+std::atomic<uint64_t> nextCacheId{1};
+}
+
+uint64_t CleanCsi::newDerivedOwner()
+{
+    return nextCacheId++;
+}
+
+void CleanCsi::invalidateCaches() const
+{
+    covGroups_ = txCovGroups_ = 0;
+    contentId_ = nextCacheId++;
+}
+
 std::pair<size_t, size_t> CleanCsi::groupRange(size_t nSub, unsigned groups, unsigned g)
 {
     return {nSub * g / groups, nSub * (g + 1) / groups};
@@ -283,7 +300,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     out.nTx = unsigned(out.streamIndex.size());
     out.layout = cache.layout;
     out.calibrated = cache.calibration != nullptr;
-    out.covGroups_ = out.txCovGroups_ = 0;
+    out.invalidateCaches();
     out.H.resize(Eigen::Index(out.nTx * nRx), Eigen::Index(nSub));
 
     // Gather, sign-correct, calibrate.
