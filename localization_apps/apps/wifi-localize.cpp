@@ -648,7 +648,14 @@ int main(int argc, char** argv)
             }
 
             // ---- the loop
-            std::set<std::string> sensorBearingLabels;  // CSI labels whose sensor makes bearings
+            // CSI labels whose sensor makes its own `<label>_AOA` bearings (`bearing_algorithm`
+            // set in its section, see share/rawlog-grabber/csi_live_bearings.ini): wifi-localize
+            // uses those and never estimates again on that CSI, from the first frame on (the
+            // frame arrives before its bearing). Sensors found to send bearings are added too.
+            std::set<std::string> sensorBearingLabels;
+            for (const auto& s : sensors)
+                if (!ini.read_string(s->section, "bearing_algorithm", "").empty())
+                    sensorBearingLabels.insert(s->sensor->getSensorLabel());
             std::deque<CObservationWiFiBearing::Ptr> recent;  // last second, for the view
             std::vector<double> lags;                         // per pose output [s]
             Trajectory2D est;

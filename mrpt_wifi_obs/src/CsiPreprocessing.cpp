@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 namespace mrpt_wifi
@@ -34,10 +35,74 @@ const char* toString(RejectReason r)
 }
 
 // ---------------------------------------------------------------------------------------------
+namespace
+{
+std::atomic<uint64_t> nextCacheId{1};
+}
+
+uint64_t CleanCsi::newDerivedOwner()
+{
+    return nextCacheId++;
+}
+
+void CleanCsi::invalidateCaches() const
+{
+    covGroups_ = txCovGroups_ = 0;
+    contentId_ = nextCacheId++;
+}
+
 std::pair<size_t, size_t> CleanCsi::groupRange(size_t nSub, unsigned groups, unsigned g)
 {
     return {nSub * g / groups, nSub * (g + 1) / groups};
 }
+
+namespace
+{
+constexpr unsigned kMaxRx = CObservationWiFiCSI::kMaxChains;
+
+/** Upper triangle of Σ_{j ∈ [b, e), m} v v^H, v = the N receive antennas of stream m at
+ *  subcarrier j, in split real/imaginary form. N at compile time: the accumulators stay in
+ *  registers (with a runtime N they go through memory on every update). */
+template <unsigned N>
+void accumulateCovariance(
+    const std::complex<float>* H, Eigen::Index rows, unsigned nTx, Eigen::Index b, Eigen::Index e,
+    float (&accRe)[kMaxRx][kMaxRx], float (&accIm)[kMaxRx][kMaxRx])
+{
+    float re[N][N] = {}, im[N][N] = {};
+    for (Eigen::Index j = b; j < e; ++j)
+    {
+        const std::complex<float>* col = H + j * rows;
+        for (unsigned m = 0; m < nTx; ++m)
+        {
+            const std::complex<float>* v = col + m * N;
+            for (unsigned r = 0; r < N; ++r)
+            {
+                const float ar = v[r].real(), ai = v[r].imag();
+                for (unsigned c = r; c < N; ++c)
+                {
+                    // v_r · conj(v_c)
+                    re[r][c] += ar * v[c].real() + ai * v[c].imag();
+                    im[r][c] += ai * v[c].real() - ar * v[c].imag();
+                }
+            }
+        }
+    }
+    for (unsigned r = 0; r < N; ++r)
+        for (unsigned c = r; c < N; ++c) accRe[r][c] = re[r][c], accIm[r][c] = im[r][c];
+}
+
+template <unsigned N = 1>
+void accumulateCovariance(
+    unsigned nRx, const std::complex<float>* H, Eigen::Index rows, unsigned nTx, Eigen::Index b,
+    Eigen::Index e, float (&accRe)[kMaxRx][kMaxRx], float (&accIm)[kMaxRx][kMaxRx])
+{
+    if constexpr (N <= kMaxRx)
+    {
+        if (nRx == N) return accumulateCovariance<N>(H, rows, nTx, b, e, accRe, accIm);
+        accumulateCovariance<N + 1>(nRx, H, rows, nTx, b, e, accRe, accIm);
+    }
+}
+}  // namespace
 
 const std::vector<Eigen::MatrixXcd>& CleanCsi::groupCovariances(unsigned groups) const
 {
@@ -45,31 +110,14 @@ const std::vector<Eigen::MatrixXcd>& CleanCsi::groupCovariances(unsigned groups)
     cov_.resize(groups);
     const Eigen::Index nSub = H.cols(), rows = H.rows();
     // One pass over the columns (contiguous: streams × antennas), accumulating the upper
-    // triangle of Σ v v^H per stream block in split real/imaginary form (vectorises; small
-    // Eigen products per block cost more in call overhead than in arithmetic here).
-    constexpr unsigned kMax = CObservationWiFiCSI::kMaxChains;
+    // triangle of Σ v v^H per stream block in split real/imaginary form (small Eigen products
+    // per block cost more in call overhead than in arithmetic here).
     for (unsigned g = 0; g < groups; ++g)
     {
         const auto [b, e] = groupRange(size_t(nSub), groups, g);
-        float accRe[kMax][kMax] = {}, accIm[kMax][kMax] = {};
-        for (Eigen::Index j = Eigen::Index(b); j < Eigen::Index(e); ++j)
-        {
-            const std::complex<float>* col = H.data() + j * rows;
-            for (unsigned m = 0; m < nTx; ++m)
-            {
-                const std::complex<float>* v = col + m * nRx;
-                for (unsigned r = 0; r < nRx; ++r)
-                {
-                    const float ar = v[r].real(), ai = v[r].imag();
-                    for (unsigned c = r; c < nRx; ++c)
-                    {
-                        // v_r · conj(v_c)
-                        accRe[r][c] += ar * v[c].real() + ai * v[c].imag();
-                        accIm[r][c] += ai * v[c].real() - ar * v[c].imag();
-                    }
-                }
-            }
-        }
+        float accRe[kMaxRx][kMaxRx] = {}, accIm[kMaxRx][kMaxRx] = {};
+        accumulateCovariance(
+            nRx, H.data(), rows, nTx, Eigen::Index(b), Eigen::Index(e), accRe, accIm);
         auto& R = cov_[g];
         R.resize(nRx, nRx);
         for (unsigned r = 0; r < nRx; ++r)
@@ -352,7 +400,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     out.nTx = unsigned(out.streamIndex.size());
     out.layout = cache.layout;
     out.calibrated = cache.calibration != nullptr;
-    out.covGroups_ = out.txCovGroups_ = 0;
+    out.invalidateCaches();
     out.H.resize(Eigen::Index(out.nTx * nRx), Eigen::Index(nSub));
 
     // Gather, sign-correct, calibrate.

@@ -1,6 +1,7 @@
 /* Speed of the bearing chain, one core, 80 MHz, 4 rx × 4 tx, 180 × 180 grid where one applies.
- * "Per frame": the cost of one estimate when a frame arrives (its own statistics included; the
- * windowed SVD redoes the SVD of its whole window). Run with --benchmark_min_time=... as usual. */
+ * "Per frame": the cost of one estimate when a frame arrives (its own statistics included, the
+ * window's older frames' kept with them as in a live or offline stream; the windowed SVD redoes
+ * the SVD of its whole window). Run with --benchmark_min_time=... as usual. */
 #include <benchmark/benchmark.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>

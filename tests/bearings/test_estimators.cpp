@@ -151,6 +151,76 @@ TEST(BearingEstimators, SpotFiPicksTheEarliestPathNotTheStrongest)
     EXPECT_GT(resolvedError(bart, -20 * kDeg) / kDeg, 2.0);
 }
 
+TEST(BearingEstimators, SlidingWindowReusesPerFrameTermsWithoutChangingTheEstimate)
+{
+    // A frame's terms are computed once and kept with it (CleanCsi::derived): estimates over a
+    // sliding window, as the live worker and csi-bearings make them, must equal estimates on
+    // freshly preprocessed frames, and a frame changed by hand (invalidateCaches) must count
+    // with its new content.
+    test::SyntheticSpec s;
+    s.rx = test::loadArray("rt-ac86u");
+    s.snr_dB = 20;
+    // Two paths: the default estimator's MUSIC step (cached smoothed covariances) runs too.
+    s.paths = {{-20 * kDeg, 0, 10e-9, {0.8, 0}}, {35 * kDeg, 0, 40e-9, std::polar(0.9, 1.0)}};
+    std::vector<CObservationWiFiCSI> raw;
+    for (unsigned n = 0; n < 14; ++n)
+    {
+        auto spec = s;
+        spec.seed = s.seed + n;
+        spec.sto_s = 5e-9 * n;
+        raw.push_back(test::synthesize(spec));
+    }
+    EstimatorContext ctx;
+    ctx.rxArray = &s.rx;
+    const auto same = [](const BearingResult& a, const BearingResult& b)
+    {
+        return a.valid == b.valid && a.aoa_rad == b.aoa_rad && a.aoaStd_rad == b.aoaStd_rad &&
+               a.quality == b.quality && a.delay_s == b.delay_s;
+    };
+    for (const std::string algo : {"default", "spotfi", "fft"})
+    {
+        CsiPreprocessor pre({}, s.rx);
+        auto sliding = createEstimator(algo);
+        sliding->options().window = 8;
+        std::vector<CleanCsi> kept(raw.size());
+        for (size_t n = 0; n < raw.size(); ++n)
+            ASSERT_EQ(pre.process(raw[n], kept[n]), RejectReason::Accepted);
+        // Fresh frames and a fresh estimator for every window: nothing cached.
+        const auto fresh = [&](size_t end, const CObservationWiFiCSI* replaceOldest)
+        {
+            auto est = createEstimator(algo);
+            est->options().window = 8;
+            std::vector<CleanCsi> clean(8);
+            std::vector<const CleanCsi*> ptrs;
+            for (size_t k = 0; k < 8; ++k)
+            {
+                const auto& in = (k == 0 && replaceOldest) ? *replaceOldest : raw[end - 8 + k];
+                EXPECT_EQ(pre.process(in, clean[k]), RejectReason::Accepted);
+                ptrs.push_back(&clean[k]);
+            }
+            BearingResult r;
+            est->estimate(ptrs, ctx, r);
+            return r;
+        };
+        std::vector<const CleanCsi*> window;
+        BearingResult r;
+        for (size_t end = 8; end <= raw.size(); ++end)
+        {
+            window.clear();
+            for (size_t k = end - 8; k < end; ++k) window.push_back(&kept[k]);
+            ASSERT_TRUE(sliding->estimate(window, ctx, r)) << algo;
+            EXPECT_TRUE(same(r, fresh(end, nullptr))) << algo << ", window ending at " << end;
+        }
+        // The oldest frame of the last window replaced by hand with another frame's CSI.
+        kept[raw.size() - 8].H = kept[0].H;
+        kept[raw.size() - 8].invalidateCaches();
+        const BearingResult before = r;
+        ASSERT_TRUE(sliding->estimate(window, ctx, r));
+        EXPECT_TRUE(same(r, fresh(raw.size(), &raw[0]))) << algo << ", frame changed by hand";
+        EXPECT_FALSE(same(r, before)) << algo;
+    }
+}
+
 TEST(BearingEstimators, AngleOfDepartureFromTheTransmitterStreams)
 {
     test::SyntheticSpec s;

@@ -7,6 +7,7 @@
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 
 #include <algorithm>
@@ -170,10 +171,10 @@ struct LiveRun
 };
 
 /** The emulator (kidnapped.yaml, preconfigured, optional odometry stream) and wifi-localize
- *  for `seconds`. */
+ *  for `seconds`; `keys`: more `.ini` keys ("SECTION/key" → value, as deriveIni). */
 LiveRun runLive(
     const test::TempDir& tmp, double seconds, bool odometry, const std::string& extraArgs = {},
-    const std::string& wrapper = {})
+    const std::string& wrapper = {}, const std::map<std::string, std::string>& keys = {})
 {
     const uint16_t csiPort = test::freeLoopbackPort(SOCK_DGRAM);
     uint16_t odoPort = test::freeLoopbackPort(SOCK_DGRAM);
@@ -183,9 +184,10 @@ LiveRun runLive(
     if (odometry) emuArgs.insert(emuArgs.end(), {"--odometry-port", std::to_string(odoPort)});
     test::EmulatorProcess emu(emuArgs, csiPort, seconds + 30);
     EXPECT_TRUE(emu.ready()) << emu.log();
+    auto allKeys = baseKeys(csiPort, odoPort);
+    for (const auto& [k, v] : keys) allKeys[k] = v;
     const auto ini = deriveIni(
-        baseKeys(csiPort, odoPort),
-        odometry ? std::set<std::string>{} : std::set<std::string>{"ODOMETRY"},
+        allKeys, odometry ? std::set<std::string>{} : std::set<std::string>{"ODOMETRY"},
         tmp.file("live.ini"));
     LiveRun r;
     r.result = test::run(
@@ -237,6 +239,57 @@ TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
     }
     EXPECT_GT(csi, 2000u);  // 4 x 100 frames/s
     EXPECT_GT(odo, 150u);   // 20 Hz
+}
+
+TEST(WifiLocalize, UsesTheCsiSensorsOwnLiveBearings)
+{
+    // The CSI sensor estimates the bearings itself (its bearing_* keys: AoD with the APs'
+    // calibrated transmit chains, the same chain as [wifi-localize]'s own in the shipped .ini):
+    // wifi-localize uses the sensor's `WIFI_CSI_AOA` observations and never estimates again on
+    // that CSI (not even on the first frames, which arrive before their bearings), and they
+    // localize the kidnapped robot as well.
+    test::TempDir tmp;
+    const auto r = runLive(
+        tmp, 14, true, "-r seen.rawlog", {},
+        {{"WIFI_CSI/bearing_algorithm", "aod"},
+         {"WIFI_CSI/bearing_calibration", apCalibration()},
+         {"WIFI_CSI/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
+         {"WIFI_CSI/bearing_tx_arrays", kShare + "/arrays/ap-linear-4.yaml"}});
+    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    EXPECT_NE(
+        r.result.output.find("(0 computed by wifi-localize, 1 sensor(s) with own bearings)"),
+        std::string::npos)
+        << r.result.output;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(r.result.output, m, std::regex("bearings used  : ([0-9]+)")))
+        << r.result.output;
+    EXPECT_GT(std::stoul(m[1]), 1000u) << r.result.output;  // ~4 x 100 per second
+    const auto e = errorsOf(r.estimate, r.truth, 5.0);
+    ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
+    EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
+
+    // What wifi-localize saw: the sensor's bearings, labelled after it, right after the CSI.
+    mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));
+    auto arch = mrpt::serialization::archiveFrom(f);
+    size_t csi = 0, own = 0, other = 0;
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            arch >> obj;
+        }
+        catch (const std::exception&)
+        {
+            break;
+        }
+        csi += bool(std::dynamic_pointer_cast<CObservationWiFiCSI>(obj));
+        if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obj))
+            (b->sensorLabel == "WIFI_CSI_AOA" && b->algorithm == "aod" ? own : other)++;
+    }
+    EXPECT_GT(csi, 2000u);
+    EXPECT_GT(own, csi / 2);  // AoA + AoD of (almost) every frame: the worker keeps up
+    EXPECT_EQ(other, 0u);
 }
 
 TEST(WifiLocalize, RunsWithoutOdometry)

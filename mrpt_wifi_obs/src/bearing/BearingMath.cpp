@@ -6,7 +6,9 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <tuple>
 
 namespace mrpt_wifi::bearing::detail
 {
@@ -266,6 +268,126 @@ void noiseProjectors(
     }
 }
 
+Eigen::MatrixXf quadraticFormBasis(
+    const AntennaArray& array, size_t n, const AngleGrid& grid, double frequency_Hz)
+{
+    Eigen::MatrixXf B(Eigen::Index(grid.size()), Eigen::Index(1 + n * (n - 1)));
+    for (size_t t = 0; t < grid.size(); ++t)
+    {
+        const Eigen::VectorXcd a = array.steeringVector(grid.angles[t], frequency_Hz, n);
+        Eigen::Index c = 0;
+        B(Eigen::Index(t), c++) = 1.f;
+        for (size_t i = 0; i < n; ++i)
+            for (size_t j = i + 1; j < n; ++j)
+            {
+                const std::complex<double> w = std::conj(a[Eigen::Index(i)]) * a[Eigen::Index(j)];
+                B(Eigen::Index(t), c++) = float(2 * w.real());
+                B(Eigen::Index(t), c++) = float(-2 * w.imag());
+            }
+    }
+    return B;
+}
+
+// ---------------------------------------------------------------------------------------------
+void TopEigenvectors::compute(const Eigen::MatrixXcd& A)
+{
+    // As SelfAdjointEigenSolver: entries mapped to [−1, 1] (QR's deflation test assumes it).
+    double scale = A.cwiseAbs().maxCoeff();
+    if (!(scale > 0)) scale = 1;
+    tri_.compute(A / scale);
+    sub_ = tri_.subDiagonal();
+    es_.computeFromTridiagonal(tri_.diagonal(), sub_, Eigen::EigenvaluesOnly);
+    eigenvalues_ = es_.eigenvalues() * scale;
+}
+
+const Eigen::MatrixXcd& TopEigenvectors::eigenvectors(Eigen::Index count)
+{
+    const Eigen::VectorXd d = tri_.diagonal();
+    const Eigen::Index n = d.size();
+    count = std::clamp<Eigen::Index>(count, 0, n);
+    const auto& ev = es_.eigenvalues();  // of T (scaled)
+    double normT = 0;                    // ‖T‖_∞
+    for (Eigen::Index i = 0; i < n; ++i)
+        normT = std::max(
+            normT, std::abs(d[i]) + (i > 0 ? std::abs(sub_[i - 1]) : 0.0) +
+                       (i + 1 < n ? std::abs(sub_[i]) : 0.0));
+    constexpr double eps = std::numeric_limits<double>::epsilon();
+    const double tiny = std::max(eps * normT, std::numeric_limits<double>::min());
+    const double clusterGap = 1e-3 * normT;  // dstein's ORTOL
+    Z_.resize(n, count);
+    lu_d_.resize(n);
+    lu_dl_.resize(std::max<Eigen::Index>(n - 1, 0));
+    lu_du_.resize(std::max<Eigen::Index>(n - 1, 0));
+    lu_du2_.resize(std::max<Eigen::Index>(n - 2, 0));
+    pivot_.resize(size_t(n));
+    double previous = -INFINITY;
+    for (Eigen::Index c = 0; c < count; ++c)
+    {
+        const Eigen::Index k = n - count + c;
+        // Equal eigenvalues get slightly different shifts, so their solves differ.
+        double lambda = ev[k];
+        if (lambda - previous < 10 * eps * std::abs(lambda))
+            lambda = previous + 10 * eps * std::abs(lambda);
+        previous = lambda;
+        // LU with partial pivoting of T − λI (LAPACK dgttrf); a vanishing pivot becomes `tiny`.
+        for (Eigen::Index i = 0; i < n; ++i) lu_d_[i] = d[i] - lambda;
+        for (Eigen::Index i = 0; i + 1 < n; ++i) lu_dl_[i] = lu_du_[i] = sub_[i];
+        for (Eigen::Index i = 0; i + 2 < n; ++i) lu_du2_[i] = 0;
+        for (Eigen::Index i = 0; i + 1 < n; ++i)
+        {
+            if (std::abs(lu_d_[i]) >= std::abs(lu_dl_[i]))
+            {
+                pivot_[size_t(i)] = 0;
+                if (std::abs(lu_d_[i]) < tiny) lu_d_[i] = tiny;
+                const double f = lu_dl_[i] / lu_d_[i];
+                lu_dl_[i] = f;
+                lu_d_[i + 1] -= f * lu_du_[i];
+            }
+            else
+            {
+                pivot_[size_t(i)] = 1;  // rows i and i + 1 swapped
+                const double f = lu_d_[i] / lu_dl_[i];
+                lu_d_[i] = lu_dl_[i];
+                lu_dl_[i] = f;
+                const double t = lu_du_[i];
+                lu_du_[i] = lu_d_[i + 1];
+                lu_d_[i + 1] = t - f * lu_d_[i + 1];
+                if (i + 2 < n)
+                {
+                    lu_du2_[i] = lu_du_[i + 1];
+                    lu_du_[i + 1] = -f * lu_du_[i + 1];
+                }
+            }
+        }
+        if (n > 0 && std::abs(lu_d_[n - 1]) < tiny) lu_d_[n - 1] = tiny;
+        // A fixed start with components along every eigenvector (as dstein's random one).
+        x_.resize(n);
+        for (Eigen::Index i = 0; i < n; ++i) x_[i] = 1.0 + 0.5 * std::sin(double(3 * i + 1));
+        for (int iteration = 0; iteration < 3; ++iteration)
+        {
+            for (Eigen::Index i = 0; i + 1 < n; ++i)  // L
+            {
+                if (pivot_[size_t(i)]) std::swap(x_[i], x_[i + 1]);
+                x_[i + 1] -= lu_dl_[i] * x_[i];
+            }
+            for (Eigen::Index i = n - 1; i >= 0; --i)  // U
+            {
+                double v = x_[i];
+                if (i + 1 < n) v -= lu_du_[i] * x_[i + 1];
+                if (i + 2 < n) v -= lu_du2_[i] * x_[i + 2];
+                x_[i] = v / lu_d_[i];
+            }
+            for (Eigen::Index o = 0; o < c; ++o)  // orthogonal to its cluster's other vectors
+                if (std::abs(ev[n - count + o] - ev[k]) <= clusterGap)
+                    x_ -= Z_.col(o).dot(x_) * Z_.col(o);
+            x_.normalize();
+        }
+        Z_.col(c) = x_;
+    }
+    V_ = tri_.matrixQ() * Z_.cast<std::complex<double>>();
+    return V_;
+}
+
 // ---------------------------------------------------------------------------------------------
 void AngleDelayProfile::prepare(
     const AntennaArray& array, size_t nRx, const SubcarrierLayout& layout, const AngleGrid& grid,
@@ -288,33 +410,45 @@ void AngleDelayProfile::prepare(
         for (size_t d = 0; d < delays_s.size(); ++d)
             D_(Eigen::Index(g), Eigen::Index(d)) = std::complex<float>(
                 std::polar(1.0, 2 * M_PI * meanK[g] * kSubcarrierSpacingHz * delays_s[d]));
-    const size_t nb = 1 + nRx * (nRx - 1);
-    B_.resize(Eigen::Index(grid.size()), Eigen::Index(nb));
-    for (size_t t = 0; t < grid.size(); ++t)
-    {
-        const Eigen::VectorXcd a =
-            array.steeringVector(grid.angles[t], layout.centerFrequency_Hz, nRx);
-        Eigen::Index c = 0;
-        B_(Eigen::Index(t), c++) = 1.f;
-        for (size_t i = 0; i < nRx; ++i)
-            for (size_t j = i + 1; j < nRx; ++j)
-            {
-                const std::complex<double> w = std::conj(a[Eigen::Index(i)]) * a[Eigen::Index(j)];
-                B_(Eigen::Index(t), c++) = float(2 * w.real());
-                B_(Eigen::Index(t), c++) = float(-2 * w.imag());
-            }
-    }
-    C_.resize(Eigen::Index(nb), Eigen::Index(delays_s.size()));
-    P_.setZero(B_.rows(), D_.cols());
+    B_ = quadraticFormBasis(array, nRx, grid, layout.centerFrequency_Hz);
+    C_.resize(B_.cols(), Eigen::Index(delays_s.size()));
+    cacheOwner_ = CleanCsi::newDerivedOwner();
+    reset();
 }
 
 void AngleDelayProfile::reset()
 {
-    P_.setZero(B_.rows(), D_.cols());
+    Csum_.setZero(B_.cols(), D_.cols());
+    powerValid_ = false;
 }
 
 void AngleDelayProfile::accumulate(const Eigen::MatrixXcf& H, unsigned nStreams)
 {
+    terms(H, nStreams, C_);
+    Csum_ += C_;
+    powerValid_ = false;
+}
+
+void AngleDelayProfile::accumulate(const CleanCsi& frame)
+{
+    Csum_ += frame.derived<Eigen::MatrixXf>(
+        cacheOwner_, [&](Eigen::MatrixXf& C) { terms(frame.H, frame.nTx, C); });
+    powerValid_ = false;
+}
+
+const Eigen::MatrixXf& AngleDelayProfile::power()
+{
+    if (!powerValid_)
+    {
+        P_.noalias() = B_ * Csum_;
+        powerValid_ = true;
+    }
+    return P_;
+}
+
+void AngleDelayProfile::terms(const Eigen::MatrixXcf& H, unsigned nStreams, Eigen::MatrixXf& C)
+{
+    C.resize(B_.cols(), D_.cols());
     Hd_.resize(H.rows(), Eigen::Index(groups_.size()));
     for (size_t g = 0; g < groups_.size(); ++g)
     {
@@ -323,30 +457,12 @@ void AngleDelayProfile::accumulate(const Eigen::MatrixXcf& H, unsigned nStreams)
     }
     Y_.noalias() = Hd_ * D_;  // (streams·rx) × delays
     const Eigen::Index n = Eigen::Index(nRx_);
+    C.setZero();
     for (Eigen::Index d = 0; d < Y_.cols(); ++d)
     {
         const std::complex<float>* y = Y_.data() + d * Y_.rows();
-        float trace = 0;
-        float cross[2 * 28] = {};  // up to 8 antennas: 28 pairs
-        for (unsigned m = 0; m < nStreams; ++m)
-        {
-            const std::complex<float>* v = y + m * n;
-            Eigen::Index c = 0;
-            for (Eigen::Index i = 0; i < n; ++i)
-            {
-                trace += std::norm(v[i]);
-                for (Eigen::Index j = i + 1; j < n; ++j, c += 2)
-                {
-                    // R_ij = v_i · conj(v_j)
-                    cross[c] += v[i].real() * v[j].real() + v[i].imag() * v[j].imag();
-                    cross[c + 1] += v[i].imag() * v[j].real() - v[i].real() * v[j].imag();
-                }
-            }
-        }
-        C_(0, d) = trace;
-        for (Eigen::Index c = 0; c + 1 < C_.rows(); ++c) C_(c + 1, d) = cross[c];
+        for (unsigned m = 0; m < nStreams; ++m) addOuterProductCoefficients(y + m * n, n, &C(0, d));
     }
-    P_.noalias() += B_ * C_;
 }
 
 Peak2D refinePeak2D(const Eigen::MatrixXf& P, size_t i, size_t j, bool circularRows)
@@ -370,41 +486,48 @@ Peak2D refinePeak2D(const Eigen::MatrixXf& P, size_t i, size_t j, bool circularR
 std::vector<Peak2D> findPeaks2D(const Eigen::MatrixXf& P, bool circularRows, size_t maxPeaks)
 {
     const long nr = long(P.rows()), nc = long(P.cols());
-    std::vector<Peak2D> peaks;
-    for (long i = 0; i < nr; ++i)
-        for (long j = 0; j < nc; ++j)
-        {
-            const float v = P(i, j);
-            bool isMax = true;
-            for (long di = -1; di <= 1 && isMax; ++di)
-                for (long dj = -1; dj <= 1; ++dj)
-                {
-                    if (!di && !dj) continue;
-                    long ii = i + di;
-                    const long jj = j + dj;
-                    if (jj < 0 || jj >= nc) continue;
-                    if (ii < 0 || ii >= nr)
-                    {
-                        if (!circularRows) continue;
-                        ii = (ii + nr) % nr;
-                    }
-                    const float w = P(ii, jj);
-                    // Ties: the first in scan order wins, so plateaus give one peak.
-                    if (w > v || (w == v && (ii < i || (ii == i && jj < j))))
-                    {
-                        isMax = false;
-                        break;
-                    }
-                }
-            if (isMax)
+    // True if (i, j) is a local maximum of its 8-neighbourhood. Ties: the first in row-major
+    // scan order wins, so plateaus give one peak.
+    const auto isMax = [&](long i, long j, float v)
+    {
+        for (long di = -1; di <= 1; ++di)
+            for (long dj = -1; dj <= 1; ++dj)
             {
-                Peak2D p;
-                p.i = size_t(i);
-                p.j = size_t(j);
-                p.value = v;
-                peaks.push_back(p);
+                if (!di && !dj) continue;
+                long ii = i + di;
+                const long jj = j + dj;
+                if (jj < 0 || jj >= nc) continue;
+                if (ii < 0 || ii >= nr)
+                {
+                    if (!circularRows) continue;
+                    ii = (ii + nr) % nr;
+                }
+                const float w = P(ii, jj);
+                if (w > v || (w == v && (ii < i || (ii == i && jj < j)))) return false;
             }
+        return true;
+    };
+    std::vector<Peak2D> peaks;
+    for (long j = 0; j < nc; ++j)
+    {
+        const float* col = P.data() + j * nr;  // contiguous along the angle axis
+        for (long i = 0; i < nr; ++i)
+        {
+            const float v = col[i];
+            // Most cells have a strictly larger neighbour in their own column: rejected first.
+            if ((i > 0 && col[i - 1] > v) || (i + 1 < nr && col[i + 1] > v)) continue;
+            if (!isMax(i, j, v)) continue;
+            Peak2D p;
+            p.i = size_t(i);
+            p.j = size_t(j);
+            p.value = v;
+            peaks.push_back(p);
         }
+    }
+    // Row-major order first, then by value: equal peaks keep the order of a row-major scan.
+    std::sort(
+        peaks.begin(), peaks.end(),
+        [](const Peak2D& a, const Peak2D& b) { return std::tie(a.i, a.j) < std::tie(b.i, b.j); });
     std::sort(
         peaks.begin(), peaks.end(),
         [](const Peak2D& a, const Peak2D& b) { return a.value > b.value; });

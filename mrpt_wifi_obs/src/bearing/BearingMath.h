@@ -6,6 +6,7 @@
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <complex>
 #include <functional>
 #include <vector>
@@ -52,6 +53,28 @@ private:
     Eigen::VectorXd coeffs_;
 };
 
+/** Basis of |a(θ)^H v|² on an angle grid (steering at one frequency, unit-modulus elements):
+ *  row θ is [1, 2 Re w_01, −2 Im w_01, 2 Re w_02, ...], w_ij = conj(a_i) a_j, i < j, so that
+ *  basis · c = Σ_v |a^H v|² for c the addOuterProductCoefficients() of the vectors v. */
+Eigen::MatrixXf quadraticFormBasis(
+    const AntennaArray& array, size_t n, const AngleGrid& grid, double frequency_Hz);
+
+/** Adds to c (1 + n(n−1) values) the coefficients of v v^H in quadraticFormBasis()'s order:
+ *  |v|², then Re and Im of v_i conj(v_j) for i < j. */
+inline void addOuterProductCoefficients(const std::complex<float>* v, Eigen::Index n, float* c)
+{
+    Eigen::Index k = 1;
+    for (Eigen::Index i = 0; i < n; ++i)
+    {
+        c[0] += std::norm(v[i]);
+        for (Eigen::Index j = i + 1; j < n; ++j, k += 2)
+        {
+            c[k] += v[i].real() * v[j].real() + v[i].imag() * v[j].imag();
+            c[k + 1] += v[i].imag() * v[j].real() - v[i].real() * v[j].imag();
+        }
+    }
+}
+
 /** Σ_g a_g(θ)^H R_g a_g(θ) at one angle, exact (group centre frequencies). */
 double groupedForm(
     const AntennaArray& array, size_t n, double theta, const std::vector<double>& groupFreqs,
@@ -95,6 +118,30 @@ void noiseProjectors(
 unsigned signalDimension(
     const Eigen::VectorXd& eigenvaluesAscending, double threshold, unsigned maxPaths);
 
+/** Eigenvalues of a Hermitian matrix and the eigenvectors of its few largest ones, without
+ *  the cost of all eigenvectors: Householder tridiagonalisation (T real), T's eigenvalues by
+ *  QR, the wanted eigenvectors of T by inverse iteration (re-orthogonalised within clusters of
+ *  close eigenvalues, as LAPACK's dstein) taken back through the reflections (zunmtr). Same
+ *  results as Eigen::SelfAdjointEigenSolver up to rounding and each vector's phase. */
+class TopEigenvectors
+{
+public:
+    void compute(const Eigen::MatrixXcd& A);
+    /** All eigenvalues, ascending. */
+    const Eigen::VectorXd& eigenvalues() const { return eigenvalues_; }
+    /** Orthonormal eigenvectors of the `count` largest eigenvalues, in the same (ascending)
+     *  order: column c belongs to eigenvalues()[n − count + c]. */
+    const Eigen::MatrixXcd& eigenvectors(Eigen::Index count);
+
+private:
+    Eigen::Tridiagonalization<Eigen::MatrixXcd> tri_;
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es_;
+    Eigen::VectorXd eigenvalues_, sub_, lu_d_, lu_dl_, lu_du_, lu_du2_, x_;
+    std::vector<int> pivot_;
+    Eigen::MatrixXd Z_;
+    Eigen::MatrixXcd V_;
+};
+
 /** 2-D Bartlett (matched-filter) power over bearing × delay, summed over streams and frames:
  *  P(θ, τ) = Σ_m |a(θ)^H H_m d(τ)|², d_k(τ) = e^{+j2π k Δf τ}, a at the centre frequency.
  *
@@ -102,7 +149,12 @@ unsigned signalDimension(
  * cos(πΔfτ)-like, > 0.95 across ±150 ns for 2, at their mean k, so the phase stays exact);
  * (2) Y = H_dec · D, one complex product; (3) per delay the 4×4 receive covariance of the
  * streams' y_m(τ), whose entries make P(·, τ) through a real product with the same
- * quadratic-form basis as QuadraticFormGrid (5× fewer flops than beamforming every stream). */
+ * quadratic-form basis as QuadraticFormGrid (5× fewer flops than beamforming every stream).
+ *
+ * P is linear in the per-delay covariance entries (the coefficients C, (1 + n(n−1)) × delays),
+ * so a window's profile is B · Σ_frames C_f: each frame's C_f is kept with the frame
+ * (CleanCsi::derived), and an estimate over a sliding window computes only the new frame's
+ * terms and one product. */
 class AngleDelayProfile
 {
 public:
@@ -112,16 +164,25 @@ public:
     void reset();
     /** Adds nStreams × nRx rows of CSI on the layout's subcarriers (row = stream·nRx + rx). */
     void accumulate(const Eigen::MatrixXcf& H, unsigned nStreams);
-    const Eigen::MatrixXf& power() const { return P_; }
+    /** Adds a preprocessed frame, its terms computed once per frame (cached with it). */
+    void accumulate(const CleanCsi& frame);
+    /** P(θ, τ) of what was accumulated since reset(). */
+    const Eigen::MatrixXf& power();
 
 private:
+    /** The frame's coefficients C (basis coefficients × delays). */
+    void terms(const Eigen::MatrixXcf& H, unsigned nStreams, Eigen::MatrixXf& C);
+
     size_t nRx_ = 0;
+    uint64_t cacheOwner_ = 0;  //!< CleanCsi::derived() key of this configuration
     std::vector<std::pair<Eigen::Index, Eigen::Index>> groups_;  // [begin, end) layout indices
     Eigen::MatrixXf B_;   // angles × (1 + n(n−1)) quadratic-form basis
     Eigen::MatrixXcf D_;  // decimated subcarriers × delays
     Eigen::MatrixXcf Hd_, Y_;
-    Eigen::MatrixXf C_;  // basis coefficients × delays
+    Eigen::MatrixXf C_;     // one frame's coefficients (uncached frames)
+    Eigen::MatrixXf Csum_;  // Σ of the accumulated frames' coefficients
     Eigen::MatrixXf P_;
+    bool powerValid_ = false;
 };
 
 /** Location of the maximum of a 2-D map with parabolic (log) refinement along each axis. */

@@ -308,7 +308,7 @@ public:
         r = BearingResult();
         if (!prepare(frames, ctx)) return false;
         profile2d_.reset();
-        for (const auto* f : frames) profile2d_.accumulate(f->H, f->nTx);
+        for (const auto* f : frames) profile2d_.accumulate(*f);
         double energy = 0;
         for (const auto* f : frames) energy += f->H.squaredNorm();
         return finishProfile(frames, frames, energy, r);
@@ -564,40 +564,35 @@ public:
         r = BearingResult();
         if (!prepare(frames, ctx)) return false;
         const Eigen::Index nRx = Eigen::Index(rx_.size()), Ls = Eigen::Index(Ls_);
-        const Eigen::Index M = nRx * Ls, shifts = Eigen::Index(gridK_.size()) - Ls + 1;
+        const Eigen::Index M = nRx * Ls;
+        // Σ over the window of each frame's smoothed covariance (lower triangle), computed
+        // once per frame.
         Rs_.setZero(M, M);
         for (const auto* f : frames)
-            for (unsigned m = 0; m < f->nTx; ++m)
-            {
-                // CSI of this stream on the uniform grid (linear interpolation).
-                for (Eigen::Index i = 0; i < nRx; ++i)
-                {
-                    const auto row = f->H.row(Eigen::Index(m) * nRx + i);
-                    for (size_t l = 0; l < gridK_.size(); ++l)
-                        U_(i, Eigen::Index(l)) = (1.f - interpT_[l]) * row[interpLo_[l]] +
-                                                 interpT_[l] * row[interpHi_[l]];
-                }
-                for (Eigen::Index q = 0; q < shifts; ++q)
-                    for (Eigen::Index i = 0; i < nRx; ++i)
-                        Xs_.block(i * Ls, q, Ls, 1) = U_.row(i).segment(q, Ls).transpose();
-                Rs_.noalias() += Xs_ * Xs_.adjoint();
-            }
-        esS_.compute(Rs_.cast<std::complex<double>>());
-        const auto& ev = esS_.eigenvalues();
-        const unsigned K = signalDimension(ev, opts_.subspaceThreshold, opts_.maxPaths);
+            Rs_ += f->derived<Eigen::MatrixXcf>(
+                cacheOwner_, [&](Eigen::MatrixXcf& R) { smoothedCovariance(*f, R); });
+        for (Eigen::Index c = 1; c < M; ++c)
+            for (Eigen::Index i = 0; i < c; ++i) Rs_(i, c) = std::conj(Rs_(c, i));
+        // Eigenvalues, and the eigenvectors of the K strongest only.
+        RsD_ = Rs_.cast<std::complex<double>>();
+        eig_.compute(RsD_);
+        const unsigned K =
+            signalDimension(eig_.eigenvalues(), opts_.subspaceThreshold, opts_.maxPaths);
+        const Eigen::MatrixXcd& Es = eig_.eigenvectors(Eigen::Index(K));
         // Pseudo-spectrum 1 / (‖s‖² − Σ_j |e_j^H s|²), s = a(θ) ⊗ d(τ), via the Kronecker
-        // structure: e_j^H s = a^T · conj(E_j) · d with E_j the eigenvector as nRx × Ls.
-        proj_.setZero(Eigen::Index(grid_.size()), Eigen::Index(delays_.size()));
+        // structure: e_j^H s = a^T · conj(E_j) · d with E_j the eigenvector as nRx × Ls, and
+        // |a^T conj(E_j) d|² = |a^H v_j|², v_j = E_j conj(d): per delay a quadratic form in a,
+        // so the coefficients of Σ_j v_j v_j^H and one real product with the basis.
+        coeffs_.setZero(Bq_.cols(), Eigen::Index(delays_.size()));
         for (unsigned j = 0; j < K; ++j)
         {
-            const Eigen::VectorXcf e =
-                esS_.eigenvectors().col(M - 1 - j).cast<std::complex<float>>();
-            for (Eigen::Index i = 0; i < nRx; ++i)
-                Ej_.row(i) = e.segment(i * Ls, Ls).conjugate().transpose();
-            B_.noalias() = Ej_ * Dm_;
-            C_.noalias() = At_ * B_;
-            proj_ += C_.cwiseAbs2();
+            const Eigen::VectorXcf e = Es.col(Eigen::Index(K - 1 - j)).cast<std::complex<float>>();
+            for (Eigen::Index i = 0; i < nRx; ++i) Ej_.row(i) = e.segment(i * Ls, Ls).transpose();
+            V_.noalias() = Ej_ * DmConj_;
+            for (Eigen::Index d = 0; d < V_.cols(); ++d)
+                addOuterProductCoefficients(&V_(0, d), nRx, &coeffs_(0, d));
         }
+        proj_.noalias() = Bq_ * coeffs_;
         const float norm2 = float(M);
         pseudo_ = (norm2 - proj_.array()).cwiseMax(1e-6f * norm2).inverse().matrix();
 
@@ -605,7 +600,6 @@ public:
         std::vector<Candidate>& cands = cands_;
         cands.clear();
         double maxPower = 0;
-        const Eigen::MatrixXcd RsD = Rs_.cast<std::complex<double>>();
         for (const auto& p0 : peaks)
         {
             const Peak2D p = refinePeak2D(pseudo_, p0.i, p0.j, grid_.circular);
@@ -618,7 +612,7 @@ public:
                     s[i * Ls + l] = a[i] * std::polar(
                                                1.0, -2 * M_PI * double(l) * step_ *
                                                         kSubcarrierSpacingHz * delay);
-            const double power = (s.adjoint() * RsD * s)(0, 0).real();
+            const double power = (s.adjoint() * RsD_ * s)(0, 0).real();
             cands.push_back({theta, delay, power});
             maxPower = std::max(maxPower, power);
         }
@@ -645,8 +639,32 @@ public:
     }
 
 protected:
+    /** One frame's smoothed covariance Σ_streams Xs Xs^H (lower triangle; the rest zero). */
+    void smoothedCovariance(const CleanCsi& f, Eigen::MatrixXcf& R)
+    {
+        const Eigen::Index nRx = Eigen::Index(rx_.size()), Ls = Eigen::Index(Ls_);
+        const Eigen::Index shifts = Eigen::Index(gridK_.size()) - Ls + 1;
+        R.setZero(nRx * Ls, nRx * Ls);
+        for (unsigned m = 0; m < f.nTx; ++m)
+        {
+            // CSI of this stream on the uniform grid (linear interpolation).
+            for (Eigen::Index i = 0; i < nRx; ++i)
+            {
+                const auto row = f.H.row(Eigen::Index(m) * nRx + i);
+                for (size_t l = 0; l < gridK_.size(); ++l)
+                    U_(i, Eigen::Index(l)) =
+                        (1.f - interpT_[l]) * row[interpLo_[l]] + interpT_[l] * row[interpHi_[l]];
+            }
+            for (Eigen::Index q = 0; q < shifts; ++q)
+                for (Eigen::Index i = 0; i < nRx; ++i)
+                    Xs_.block(i * Ls, q, Ls, 1) = U_.row(i).segment(q, Ls).transpose();
+            R.selfadjointView<Eigen::Lower>().rankUpdate(Xs_);
+        }
+    }
+
     void onPrepare(const CleanCsi& f) override
     {
+        cacheOwner_ = CleanCsi::newDerivedOwner();
         delays_ = delayGrid(opts_);
         const auto& k = f.layout->subcarriers;
         step_ = opts_.subcarrierStep;
@@ -669,14 +687,12 @@ protected:
         U_.resize(nRx, Eigen::Index(gridK_.size()));
         Xs_.resize(nRx * Ls, shifts);
         Ej_.resize(nRx, Ls);
-        Dm_.resize(Ls, Eigen::Index(delays_.size()));
+        DmConj_.resize(Ls, Eigen::Index(delays_.size()));
         for (Eigen::Index l = 0; l < Ls; ++l)
             for (size_t d = 0; d < delays_.size(); ++d)
-                Dm_(l, Eigen::Index(d)) = std::complex<float>(std::polar(
-                    1.0, -2 * M_PI * double(l) * step_ * kSubcarrierSpacingHz * delays_[d]));
-        At_ = rx_.steeringMatrix(grid_.angles, f.layout->centerFrequency_Hz)
-                  .transpose()
-                  .cast<std::complex<float>>();
+                DmConj_(l, Eigen::Index(d)) = std::conj(std::complex<float>(std::polar(
+                    1.0, -2 * M_PI * double(l) * step_ * kSubcarrierSpacingHz * delays_[d])));
+        Bq_ = quadraticFormBasis(rx_, size_t(nRx), grid_, f.layout->centerFrequency_Hz);
     }
 
 public:
@@ -689,14 +705,16 @@ public:
 
 protected:
     std::vector<Candidate> cands_;
+    uint64_t cacheOwner_ = 0;  //!< CleanCsi::derived() key of the smoothed covariances
     double step_ = 4;
     unsigned Ls_ = 16;
     std::vector<int> gridK_;
     std::vector<Eigen::Index> interpLo_, interpHi_;
     std::vector<float> interpT_;
-    Eigen::MatrixXcf U_, Xs_, Rs_, Ej_, Dm_, At_, B_, C_;
-    Eigen::MatrixXf proj_, pseudo_;
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> esS_;
+    Eigen::MatrixXcf U_, Xs_, Rs_, Ej_, DmConj_, V_;
+    Eigen::MatrixXf Bq_, coeffs_, proj_, pseudo_;
+    Eigen::MatrixXcd RsD_;
+    TopEigenvectors eig_;
 };
 
 // =============================================================================================
@@ -735,7 +753,7 @@ public:
         double energy = 0;
         for (const auto* f : frames)
         {
-            profile2d_.accumulate(f->H, f->nTx);
+            profile2d_.accumulate(*f);
             energy += f->H.squaredNorm();
         }
         const Eigen::MatrixXf& P = profile2d_.power();

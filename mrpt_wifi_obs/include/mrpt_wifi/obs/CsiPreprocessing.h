@@ -8,6 +8,7 @@
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 
 #include <Eigen/Core>
+#include <any>
 #include <map>
 #include <memory>
 #include <string>
@@ -112,8 +113,42 @@ struct CleanCsi
      *  transmitter-side covariance used for the angle of departure. */
     const std::vector<Eigen::MatrixXcd>& txGroupCovariances(unsigned groups) const;
 
-    /** Forgets the cached covariances (after changing H by hand). */
-    void invalidateCaches() const { covGroups_ = txCovGroups_ = 0; }
+    /** Forgets the cached covariances and derived() terms (after changing H by hand). */
+    void invalidateCaches() const;
+
+    /** A statistic an estimator derives from this frame alone (e.g. its terms of a windowed
+     *  angle × delay profile), computed once per frame like the covariances: an estimate over
+     *  a sliding window then computes it only for the window's new frame and sums the rest.
+     *  `owner` names the computation and its configuration (newDerivedOwner(); a new one
+     *  whenever the configuration changes); `compute(M&)` fills the value on a miss, reusing
+     *  the storage of the slot's previous frame. Frames that never went through
+     *  CsiPreprocessor::process() or invalidateCaches() are not cached (computed on every
+     *  call). The reference is valid until the next derived() call on this frame. Not
+     *  thread-safe, like the covariances. */
+    template <typename M, typename Compute>
+    const M& derived(uint64_t owner, Compute&& compute) const
+    {
+        Derived* d = nullptr;
+        for (auto& e : derived_)
+            if (e.owner == owner) d = &e;
+        if (!d)
+        {
+            if (derived_.size() >= kMaxDerived) derived_.erase(derived_.begin());
+            derived_.reserve(kMaxDerived);
+            d = &derived_.emplace_back();
+            d->owner = owner;
+        }
+        if (!std::any_cast<M>(&d->value)) d->value = M();
+        M& value = *std::any_cast<M>(&d->value);
+        if (contentId_ == 0 || d->contentId != contentId_)
+        {
+            compute(value);
+            d->contentId = contentId_;
+        }
+        return value;
+    }
+    /** A process-wide unique `owner` for derived(). */
+    static uint64_t newDerivedOwner();
 
     /** Which layout indices each of `groups` sub-bands covers: [begin, end). */
     static std::pair<size_t, size_t> groupRange(size_t nSub, unsigned groups, unsigned g);
@@ -121,6 +156,15 @@ struct CleanCsi
 private:
     mutable unsigned covGroups_ = 0, txCovGroups_ = 0;
     mutable std::vector<Eigen::MatrixXcd> cov_, txCov_;
+    struct Derived
+    {
+        uint64_t owner = 0, contentId = 0;
+        std::any value;
+    };
+    static constexpr size_t kMaxDerived = 4;  //!< computations cached per frame
+    /** Identifies H's current content (0: a frame built by hand, not cached). */
+    mutable uint64_t contentId_ = 0;
+    mutable std::vector<Derived> derived_;
     friend class CsiPreprocessor;
 };
 
