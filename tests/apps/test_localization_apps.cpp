@@ -7,6 +7,7 @@
 #include <mrpt_wifi/localization/RawlogIO.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -289,6 +290,81 @@ TEST(LocalizationAppsGraphSlam, NonOverlappingTimestampsFailClearly)
             f.dir + "/late.txt -o " + f.dir + "/gs2");
     EXPECT_EQ(r.rc, 1);
     EXPECT_NE(r.out.find("overlap"), std::string::npos) << r.out;
+}
+
+namespace
+{
+/** "median ATE reduction: X %" of a wifi-graphslam summary; NaN when absent. */
+double ateReduction(const std::string& out)
+{
+    const std::string key = "median ATE reduction:";
+    const size_t p = out.find(key);
+    return p == std::string::npos ? std::nan("") : std::atof(out.c_str() + p + key.size());
+}
+
+/** Issue 12.1's reproducer: loop.yaml without antenna jumps -> wifi-sim -> truth calibration ->
+ *  csi-bearings --algo aoa_only -> wifi-graphslam with the known AP map vs estimated APs. The
+ *  known map must never make the result worse (>= estimated - 5 points). The issue measured
+ *  -494 % vs -51 % on seed 41: the calibration files were the scenario's seed's (another boot's
+ *  receiver offsets; AoA median 21 deg instead of 1 deg), see bearing-accuracy --seed. */
+void knownVsEstimatedApsOnLoop(unsigned seed)
+{
+    const std::string sim = kBin + "/wifi-sim", cb = kBin + "/csi-bearings",
+                      ba = kBin + "/bearing-accuracy";
+    for (const auto& p : {sim, cb, ba})
+        if (!mrpt::system::fileExists(p)) GTEST_SKIP() << p << " not built";
+    const std::string d = mrpt_wifi::test::tempPath("_loop" + std::to_string(seed));
+    ASSERT_TRUE(mrpt::system::createDirectory(d));
+    const std::string share = std::string(MRPT_WIFI_SOURCE_DIR) + "/share";
+    {
+        std::ifstream in(share + "/scenarios/loop.yaml");
+        ASSERT_TRUE(in.good());
+        std::stringstream ss;
+        ss << in.rdbuf();
+        std::string y = ss.str();
+        const auto replaceAll = [&](const std::string& a, const std::string& b)
+        {
+            for (size_t p = y.find(a); p != std::string::npos; p = y.find(a, p + b.size()))
+                y.replace(p, a.size(), b);
+        };
+        replaceAll("antenna_jumps: {enabled: true", "antenna_jumps: {enabled: false");
+        replaceAll("../arrays/", share + "/arrays/");
+        ASSERT_NE(y.find("antenna_jumps: {enabled: false"), std::string::npos);
+        std::ofstream(d + "/loop.yaml") << y;
+    }
+    const std::string s = std::to_string(seed);
+    auto r = run(
+        sim + " -q " + d + "/loop.yaml " + d + "/sim.rawlog -d 60 -s " + s + " -t " + d + "/truth");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    r = run(ba + " --truth-calibration " + d + "/loop.yaml " + d + "/calib --seed " + s);
+    ASSERT_EQ(r.rc, 0) << r.out;
+    r =
+        run(cb + " -q " + d + "/sim.rawlog " + d + "/b.rawlog --algo aoa_only --stride 2 --calib " +
+            d + "/calib");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    const std::string gs = kBin + "/wifi-graphslam --no-plots -r " + d + "/b.rawlog --aps " + d +
+                           "/truth/transmitters.yaml --no-aod --sensor-pose 0.1 0 0.4 0 0 0 -g " +
+                           d + "/truth/trajectory_tum.txt";
+    const auto known = run(gs + " -o " + d + "/known");
+    ASSERT_EQ(known.rc, 0) << known.out;
+    const auto est = run(gs + " --estimate-aps -o " + d + "/est");
+    ASSERT_EQ(est.rc, 0) << est.out;
+    const double k = ateReduction(known.out), e = ateReduction(est.out);
+    std::cout << "seed " << seed << ": median ATE reduction, known APs " << k
+              << " %, estimated APs " << e << " %\n";
+    // Measured (60 s, stride 2): seed 41 78 % / 43 %, seed 42 83 % / 56 %.
+    EXPECT_GE(k, e - 5) << known.out << est.out;
+    EXPECT_GT(k, 50) << known.out;
+}
+}  // namespace
+
+TEST(LocalizationAppsGraphSlam, KnownApsAoaOnlyPipelineSeed41)
+{
+    knownVsEstimatedApsOnLoop(41);
+}
+TEST(LocalizationAppsGraphSlam, KnownApsAoaOnlyPipelineSeed42)
+{
+    knownVsEstimatedApsOnLoop(42);
 }
 
 TEST(LocalizationAppsIot, MapsDevicesAndReportsUnknownNames)
