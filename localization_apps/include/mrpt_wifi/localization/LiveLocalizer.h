@@ -126,6 +126,7 @@ private:
     bool enabled_ = false;
     double updatePeriod_s_ = 2.0;
     DeviceMapOptions opts_;
+    OdometryDrift drift_;  //!< map_odometry_drift_xy, map_odometry_drift_yaw_deg
     std::vector<std::pair<double, mrpt::math::TPose2D>> odometry_;
     std::vector<BearingRecord> bearings_;
     std::vector<DeviceEstimate> devices_;
