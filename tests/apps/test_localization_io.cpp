@@ -6,6 +6,7 @@
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/obs/CommandLine.h>
 
 #include <fstream>
 
@@ -205,4 +206,29 @@ TEST(LocalizationUnknownMotion, ConstantVelocityPredictsFromRecentEstimates)
     ConstantVelocityPrediction off(m);
     for (int i = 0; i <= 40; ++i) off.addEstimate(0.05 * i, {0.4 * 0.05 * i, 0, 0});
     EXPECT_EQ(off.predictIncrement(2.1), mrpt::poses::CPose2D());
+}
+
+TEST(CommandLineJoinedArgv, SeparateOrQuotedNumbersAndNothingMore)
+{
+    // `--initial-pose 2 1.5 0` and `--initial-pose "2 1.5 0"` are the same, and the quoted form
+    // must not swallow the options after it (it once ate `--odometry-drift 0 0`).
+    const auto joined = [](std::vector<std::string> a)
+    {
+        std::vector<char*> argv;
+        for (auto& s : a) argv.push_back(s.data());
+        mrpt_wifi::cli::JoinedArgv j(int(argv.size()), argv.data(), "--initial-pose", 3);
+        return std::vector<std::string>(j.argv(), j.argv() + j.argc());
+    };
+    using V = std::vector<std::string>;
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2", "1.5", "0", "-q"}),
+        V({"app", "--initial-pose", "2 1.5 0", "-q"}));
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2 1.5 0", "--odometry-drift", "0 0"}),
+        V({"app", "--initial-pose", "2 1.5 0", "--odometry-drift", "0 0"}));
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2 1.5", "0", "-q"}),
+        V({"app", "--initial-pose", "2 1.5 0", "-q"}));
+    // Too few: what there is, for the pose parser to reject with its message.
+    EXPECT_EQ(joined({"app", "--initial-pose", "2"}), V({"app", "--initial-pose", "2"}));
 }
