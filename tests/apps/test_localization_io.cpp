@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <gtest/gtest.h>
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
@@ -231,4 +232,32 @@ TEST(CommandLineJoinedArgv, SeparateOrQuotedNumbersAndNothingMore)
         V({"app", "--initial-pose", "2 1.5 0", "-q"}));
     // Too few: what there is, for the pose parser to reject with its message.
     EXPECT_EQ(joined({"app", "--initial-pose", "2"}), V({"app", "--initial-pose", "2"}));
+}
+
+TEST(ConstantVelocityPrediction, ForwardOnlyMovesAlongTheHeading)
+{
+    // Estimates drifting sideways (noise of the PF mean) while the robot faces +x at 0.5 m/s:
+    // the plain prediction carries the sideways motion on; forward_only keeps the speed along
+    // the heading only.
+    mrpt_wifi::localization::UnknownMotion m;
+    m.maxSpeed_mps = 1.0, m.velocityWindow_s = 1.0;
+    mrpt_wifi::localization::ConstantVelocityPrediction plain(m);
+    m.forwardOnly = true;
+    mrpt_wifi::localization::ConstantVelocityPrediction forward(m);
+    for (int k = 0; k <= 10; ++k)
+    {
+        const mrpt::math::TPose2D p(0.05 * k, 0.02 * k, 0);
+        plain.addEstimate(0.1 * k, p);
+        forward.addEstimate(0.1 * k, p);
+    }
+    const auto a = plain.predictIncrement(1.1), b = forward.predictIncrement(1.1);
+    EXPECT_NEAR(a.x(), 0.05, 1e-9);
+    EXPECT_NEAR(a.y(), 0.02, 1e-9);
+    EXPECT_NEAR(b.x(), 0.05, 1e-9);
+    EXPECT_NEAR(b.y(), 0.0, 1e-12);
+    // Read from the .ini like the other keys.
+    mrpt::config::CConfigFileMemory ini("[UnknownMotion]\nforward_only = true\n");
+    mrpt_wifi::localization::UnknownMotion r;
+    r.loadFromConfigFile(ini, "UnknownMotion");
+    EXPECT_TRUE(r.forwardOnly);
 }
