@@ -159,6 +159,23 @@ int main(int argc, char** argv)
             if (opt.apsKnown)
                 sum << "  start     : " << res.placement << " (lowest final cost of "
                     << res.hypotheses << " optimised starts)\n";
+            {
+                char buf[256];
+                std::snprintf(
+                    buf, sizeof(buf),
+                    "  bearings  : median residual %.1f deg (%.2f sigma), %.0f %% within 3 "
+                    "sigma of the solution\n",
+                    res.medianResidual_deg, res.medianWhitenedResidual,
+                    100 * res.bearingsWithin3Sigma);
+                sum << buf;
+                // A calibrated receiver leaves a few degrees (1-3 on the simulator); tens of
+                // degrees are biased bearings, which no start or robust loss can fix.
+                if (res.medianResidual_deg > 10)
+                    sum << "  WARNING   : the bearings disagree with the solution by a median of "
+                           "more than 10 deg: they are biased (a receiver calibration of another "
+                           "boot or simulator seed? antenna jumps?); check the calibration "
+                           "(wifi-calibrate --check) before trusting this trajectory\n";
+            }
             sum << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
                 << " s\n";
             if (argGt.isSet())

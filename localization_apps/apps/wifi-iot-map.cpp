@@ -62,6 +62,12 @@ int main(int argc, char** argv)
                 "With odometry: its position noise [m per sqrt(m) travelled] (yaw: 1 deg per "
                 "sqrt(m) times this / 0.02)",
                 false, 0.02, "S", cmd);
+            TCLAP::ValueArg<std::string> argDrift(
+                "", "odometry-drift",
+                "With --trust-odometry: the odometry's drift 'XY YAW' (position m per sqrt(m) "
+                "travelled, heading deg per sqrt(m)); the devices' sigma includes the pose "
+                "uncertainty it gives the rays ('0 0': the odometry is exact)",
+                false, "0.01 0.3", "XY YAW", cmd);
             TCLAP::SwitchArg argTrustOdometry(
                 "", "trust-odometry",
                 "Take the odometry (--odometry-tum or the rawlog's) as the exact trajectory "
@@ -190,6 +196,19 @@ int main(int argc, char** argv)
             if (rays.empty())
                 throw std::runtime_error(
                     "no bearing falls within the trajectory's time span (" + warn.summary() + ")");
+            const bool trustedOdometry = !joint && !argTraj.isSet();
+            if (trustedOdometry)
+            {
+                std::istringstream is(argDrift.getValue());
+                OdometryDrift drift;
+                double yaw_deg = 0;
+                if (!(is >> drift.sigmaXY_perSqrtM >> yaw_deg) || drift.sigmaXY_perSqrtM < 0 ||
+                    yaw_deg < 0)
+                    throw std::invalid_argument(
+                        "--odometry-drift: expected 'XY YAW' (two numbers >= 0)");
+                drift.sigmaYaw_perSqrtM = mrpt::DEG2RAD(yaw_deg);
+                addOdometryDrift(rays, traj, drift);
+            }
 
             DeviceMapOptions o;
             o.model.minStd_rad = mrpt::DEG2RAD(argMinStd.getValue());

@@ -362,6 +362,7 @@ GraphSlamResult solveOnce(
 
     auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
     std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
+    std::vector<std::pair<ceres::ResidualBlockId, double>> bearingBlocks;  // with σ
     for (const auto& a : att)
     {
         const auto it = apIndex.find(a.b->transmitter);
@@ -369,23 +370,27 @@ GraphSlamResult solveOnce(
         double* ap = A[it->second].data();
         if (opt.useAoa && a.b->hasAoa)
         {
-            problem.AddResidualBlock(
-                new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
-                    new detail::AoaResidual{
-                        a.offset.x, a.offset.y, a.offset.phi, a.b->aoa, a.b->aoaMirror,
-                        sigma(a.b->aoaStd), a.b->aoaAmbiguous}),
-                detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
+            bearingBlocks.emplace_back(
+                problem.AddResidualBlock(
+                    new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
+                        new detail::AoaResidual{
+                            a.offset.x, a.offset.y, a.offset.phi, a.b->aoa, a.b->aoaMirror,
+                            sigma(a.b->aoaStd), a.b->aoaAmbiguous}),
+                    detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
+                sigma(a.b->aoaStd));
             res.aoaEdges++;
             apUsed[it->second] = true;
         }
         if (opt.useAod && a.b->hasAod)
         {
-            problem.AddResidualBlock(
-                new ceres::AutoDiffCostFunction<detail::AodResidual, 1, 3, 3>(
-                    new detail::AodResidual{
-                        a.offset.x, a.offset.y, a.b->aod, a.b->aodMirror, sigma(a.b->aodStd),
-                        a.b->aodAmbiguous}),
-                detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap);
+            bearingBlocks.emplace_back(
+                problem.AddResidualBlock(
+                    new ceres::AutoDiffCostFunction<detail::AodResidual, 1, 3, 3>(
+                        new detail::AodResidual{
+                            a.offset.x, a.offset.y, a.b->aod, a.b->aodMirror, sigma(a.b->aodStd),
+                            a.b->aodAmbiguous}),
+                    detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
+                sigma(a.b->aodStd));
             res.aodEdges++;
             apUsed[it->second] = apAod[it->second] = true;
         }
@@ -415,6 +420,33 @@ GraphSlamResult solveOnce(
     res.iterations = int(sum.iterations.size());
     res.solverReport = sum.BriefReport();
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
+
+    // ---- How far the bearings are from the solution: biased bearings (e.g. a receiver
+    //      calibration of another boot) stay tens of degrees off whatever the start.
+    {
+        std::vector<double> w, deg;
+        w.reserve(bearingBlocks.size()), deg.reserve(bearingBlocks.size());
+        size_t within = 0;
+        for (const auto& [id, sg] : bearingBlocks)
+        {
+            double cost = 0, r = 0;
+            if (!problem.EvaluateResidualBlock(id, false, &cost, &r, nullptr)) continue;
+            w.push_back(std::abs(r));
+            deg.push_back(mrpt::RAD2DEG(std::abs(r) * sg));
+            within += std::abs(r) <= 3;
+        }
+        if (!w.empty())
+        {
+            res.bearingsWithin3Sigma = double(within) / double(w.size());
+            const auto median = [](std::vector<double>& v)
+            {
+                std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+                return v[v.size() / 2];
+            };
+            res.medianWhitenedResidual = median(w);
+            res.medianResidual_deg = median(deg);
+        }
+    }
 
     // ---- AP position covariance from the joint solution (trajectory and APs together).
     res.apCov.assign(A.size(), {0, 0, 0});

@@ -35,6 +35,48 @@ std::map<MacAddress, std::vector<BearingRay>> raysFromBearings(
     return out;
 }
 
+void addOdometryDrift(
+    std::map<MacAddress, std::vector<BearingRay>>& rays, const Trajectory2D& traj,
+    const OdometryDrift& drift)
+{
+    if (traj.empty()) return;
+    // Per trajectory pose i: distance travelled s_i and the heading walk's effect on the
+    // position, ∫₀^{s_i} |p_i − p(s')|² ds' (a heading error picked up at s' rotates everything
+    // driven after it: on a loop back to the start it cancels), accumulated in O(N) from
+    // S0 = ∫ds, S1 = ∫p ds, S2 = ∫|p|² ds (positions relative to the first pose).
+    const size_t n = traj.size();
+    std::vector<double> arc(n, 0.0), headingVar(n, 0.0);
+    double S0 = 0, S1x = 0, S1y = 0, S2 = 0;
+    const double x0 = traj.poses.front().x, y0 = traj.poses.front().y;
+    for (size_t i = 1; i < n; ++i)
+    {
+        const double ax = traj.poses[i - 1].x - x0, ay = traj.poses[i - 1].y - y0;
+        const double bx = traj.poses[i].x - x0, by = traj.poses[i].y - y0;
+        const double ds = std::hypot(bx - ax, by - ay);
+        const double mx = 0.5 * (ax + bx), my = 0.5 * (ay + by);
+        S0 += ds, S1x += ds * mx, S1y += ds * my, S2 += ds * (mx * mx + my * my);
+        arc[i] = S0;
+        headingVar[i] = std::max(0.0, (bx * bx + by * by) * S0 - 2 * (bx * S1x + by * S1y) + S2);
+    }
+    const auto at = [&](const std::vector<double>& v, double t)
+    {
+        if (t <= traj.t.front()) return v.front();
+        if (t >= traj.t.back()) return v.back();
+        const size_t i = size_t(std::upper_bound(traj.t.begin(), traj.t.end(), t) - traj.t.begin());
+        const double f = (t - traj.t[i - 1]) / (traj.t[i] - traj.t[i - 1]);
+        return v[i - 1] + f * (v[i] - v[i - 1]);
+    };
+    const double sxy2 = drift.sigmaXY_perSqrtM * drift.sigmaXY_perSqrtM,
+                 syaw2 = drift.sigmaYaw_perSqrtM * drift.sigmaYaw_perSqrtM;
+    for (auto& [mac, list] : rays)
+        for (auto& r : list)
+        {
+            r.poseStdYaw = std::sqrt(syaw2 * at(arc, r.t));
+            // Per axis: the heading term spreads over both axes.
+            r.poseStdXY = std::sqrt(sxy2 * at(arc, r.t) + 0.5 * syaw2 * at(headingVar, r.t));
+        }
+}
+
 DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const DeviceMapOptions& o)
 {
     DeviceEstimate d;
@@ -137,6 +179,21 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
             d.covInflation = std::max(1.0, chi2 / d.inliers) * double(d.inliers) / cells.size();
             for (double& cv : d.cov) cv *= d.covInflation;
         }
+    }
+    if (o.includePoseUncertainty && d.inliers > 0)
+    {
+        // Odometry drift moves every ray of a stretch together: the device moves with it.
+        double var = 0;
+        for (size_t i = 0; i < rays.size(); ++i)
+        {
+            const auto& r = rays[i];
+            if (res[i] >= o.inlierSigmas * o.model.sigma(r.sigma)) continue;
+            const double range = std::hypot(d.x - r.x, d.y - r.y);
+            var += r.poseStdXY * r.poseStdXY + range * range * r.poseStdYaw * r.poseStdYaw;
+        }
+        var /= double(d.inliers);
+        d.poseStd_m = std::sqrt(var);
+        d.cov[0] += var, d.cov[2] += var;
     }
     std::nth_element(res.begin(), res.begin() + long(res.size() / 2), res.end());
     d.medianResidual_deg = mrpt::RAD2DEG(res[res.size() / 2]);

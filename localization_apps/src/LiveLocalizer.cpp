@@ -165,6 +165,12 @@ LiveDeviceMapper::LiveDeviceMapper(const mrpt::config::CConfigFileBase& c, const
     opts_.loss = c.read_string(s, "map_loss", "cauchy");
     opts_.gridStep_m = c.read_double(s, "map_grid_m", 0.1);
     updatePeriod_s_ = c.read_double(s, "map_update_period_s", updatePeriod_s_);
+    // wifi-iot-map --trust-odometry --odometry-drift "XY YAW"'s defaults
+    drift_.sigmaXY_perSqrtM = c.read_double(s, "map_odometry_drift_xy", 0.01);
+    drift_.sigmaYaw_perSqrtM = mrpt::DEG2RAD(c.read_double(s, "map_odometry_drift_yaw_deg", 0.3));
+    if (!(drift_.sigmaXY_perSqrtM >= 0) || !(drift_.sigmaYaw_perSqrtM >= 0))
+        throw std::invalid_argument(
+            "[" + s + "] map_odometry_drift_xy and map_odometry_drift_yaw_deg must be >= 0");
     if (!(opts_.model.minStd_rad > 0) || !(opts_.model.outlierProb >= 0) ||
         !(opts_.model.outlierProb < 1) || !(opts_.gridStep_m > 0) || !(updatePeriod_s_ > 0))
         throw std::invalid_argument(
@@ -204,7 +210,10 @@ void LiveDeviceMapper::update()
     warnings_ = InputWarnings();
     devices_.clear();
     if (traj.empty()) return;
-    for (const auto& [mac, rays] : raysFromBearings(bearings, traj, &warnings_))
+    auto allRays = raysFromBearings(bearings, traj, &warnings_);
+    // The map trusts the odometry: its drift is in the devices' σ.
+    addOdometryDrift(allRays, traj, drift_);
+    for (const auto& [mac, rays] : allRays)
     {
         auto d = triangulateDevice(rays, opts_);
         d.mac = mac;

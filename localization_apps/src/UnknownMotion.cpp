@@ -52,6 +52,7 @@ void UnknownMotion::loadFromConfigFile(
     minStdPhi_deg = cfg.read_double(s, "min_std_phi_deg", minStdPhi_deg);
     constantVelocity = cfg.read_bool(s, "constant_velocity", constantVelocity);
     velocityWindow_s = cfg.read_double(s, "velocity_window_s", velocityWindow_s);
+    forwardOnly = cfg.read_bool(s, "forward_only", forwardOnly);
     validate();
 }
 
@@ -79,7 +80,9 @@ std::string UnknownMotion::asString() const
     o << (constantVelocity ? "constant velocity + random walk" : "random walk") << ", max speed "
       << maxSpeed_mps << " m/s, max turn rate " << maxTurnRate_dps << " deg/s, tau "
       << correlationTime_s << " s";
-    if (constantVelocity) o << ", velocity over " << velocityWindow_s << " s";
+    if (constantVelocity)
+        o << ", velocity over " << velocityWindow_s << " s"
+          << (forwardOnly ? ", forward only" : "");
     return o.str();
 }
 
@@ -108,7 +111,7 @@ mrpt::poses::CPose2D ConstantVelocityPrediction::predictIncrement(double t_s) co
     const double w = mrpt::math::wrapToPi(b.phi - a.phi) / span;
     const double dt = std::clamp(t_s - tb, 0.0, m_.maxStep_s);
     const double c = std::cos(b.phi), s = std::sin(b.phi);
-    double dx = (c * vx + s * vy) * dt, dy = (-s * vx + c * vy) * dt;
+    double dx = (c * vx + s * vy) * dt, dy = m_.forwardOnly ? 0.0 : (-s * vx + c * vy) * dt;
     const double d = std::hypot(dx, dy), dMax = m_.maxSpeed_mps * dt;
     if (d > dMax) dx *= dMax / d, dy *= dMax / d;
     const double wMax = mrpt::DEG2RAD(m_.maxTurnRate_dps);

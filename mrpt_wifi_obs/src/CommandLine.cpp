@@ -18,11 +18,23 @@ JoinedArgv::JoinedArgv(int argc, char** argv, const std::string& flag, unsigned 
     auto& args = args_;
     for (size_t i = 0; i < args.size(); ++i)
     {
-        if (args[i] != flag || i + count >= args.size()) continue;
-        std::string joined = args[i + 1];
-        for (unsigned j = 2; j <= count; ++j) joined += " " + args[i + j];
-        args.erase(args.begin() + long(i) + 2, args.begin() + long(i) + 1 + count);
-        args[i + 1] = joined;
+        if (args[i] != flag || i + 1 >= args.size()) continue;
+        // Join tokens until the value holds `count` numbers: `--flag "a b c"` (one quoted
+        // token) is complete already and must not swallow the options after it.
+        const auto words = [](const std::string& t)
+        {
+            std::istringstream in(t);
+            size_t n = 0;
+            for (std::string w; in >> w;) ++n;
+            return n;
+        };
+        size_t have = words(args[i + 1]), next = i + 2;
+        while (have < count && next < args.size())
+        {
+            args[i + 1] += " " + args[next];
+            have += words(args[next]);
+            args.erase(args.begin() + long(next));
+        }
     }
     for (const auto& a : args_) pointers_.push_back(a.c_str());
 }

@@ -7,6 +7,7 @@
 #include <mrpt_wifi/localization/RawlogIO.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -291,6 +292,96 @@ TEST(LocalizationAppsGraphSlam, NonOverlappingTimestampsFailClearly)
     EXPECT_NE(r.out.find("overlap"), std::string::npos) << r.out;
 }
 
+namespace
+{
+/** "median ATE reduction: X %" of a wifi-graphslam summary; NaN when absent. */
+double ateReduction(const std::string& out)
+{
+    const std::string key = "median ATE reduction:";
+    const size_t p = out.find(key);
+    return p == std::string::npos ? std::nan("") : std::atof(out.c_str() + p + key.size());
+}
+
+/** Issue 12.1's reproducer: loop.yaml without antenna jumps -> wifi-sim -> truth calibration ->
+ *  csi-bearings --algo aoa_only -> wifi-graphslam with the known AP map vs estimated APs. The
+ *  known map must never make the result worse (>= estimated - 5 points). The issue measured
+ *  -494 % vs -51 % on seed 41: the calibration files were the scenario's seed's (another boot's
+ *  receiver offsets; AoA median 21 deg instead of 1 deg), see bearing-accuracy --seed. */
+void knownVsEstimatedApsOnLoop(unsigned seed, bool alsoWrongCalibration)
+{
+    const std::string sim = kBin + "/wifi-sim", cb = kBin + "/csi-bearings",
+                      ba = kBin + "/bearing-accuracy";
+    for (const auto& p : {sim, cb, ba})
+        if (!mrpt::system::fileExists(p)) GTEST_SKIP() << p << " not built";
+    const std::string d = mrpt_wifi::test::tempPath("_loop" + std::to_string(seed));
+    ASSERT_TRUE(mrpt::system::createDirectory(d));
+    const std::string share = std::string(MRPT_WIFI_SOURCE_DIR) + "/share";
+    {
+        std::ifstream in(share + "/scenarios/loop.yaml");
+        ASSERT_TRUE(in.good());
+        std::stringstream ss;
+        ss << in.rdbuf();
+        std::string y = ss.str();
+        const auto replaceAll = [&](const std::string& a, const std::string& b)
+        {
+            for (size_t p = y.find(a); p != std::string::npos; p = y.find(a, p + b.size()))
+                y.replace(p, a.size(), b);
+        };
+        replaceAll("antenna_jumps: {enabled: true", "antenna_jumps: {enabled: false");
+        replaceAll("../arrays/", share + "/arrays/");
+        ASSERT_NE(y.find("antenna_jumps: {enabled: false"), std::string::npos);
+        std::ofstream(d + "/loop.yaml") << y;
+    }
+    const std::string s = std::to_string(seed);
+    auto r = run(
+        sim + " -q " + d + "/loop.yaml " + d + "/sim.rawlog -d 60 -s " + s + " -t " + d + "/truth");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    r = run(ba + " --truth-calibration " + d + "/loop.yaml " + d + "/calib --seed " + s);
+    ASSERT_EQ(r.rc, 0) << r.out;
+    r =
+        run(cb + " -q " + d + "/sim.rawlog " + d + "/b.rawlog --algo aoa_only --stride 2 --calib " +
+            d + "/calib");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    const std::string gs = kBin + "/wifi-graphslam --no-plots -r " + d + "/b.rawlog --aps " + d +
+                           "/truth/transmitters.yaml --no-aod --sensor-pose 0.1 0 0.4 0 0 0 -g " +
+                           d + "/truth/trajectory_tum.txt";
+    const auto known = run(gs + " -o " + d + "/known");
+    ASSERT_EQ(known.rc, 0) << known.out;
+    const auto est = run(gs + " --estimate-aps -o " + d + "/est");
+    ASSERT_EQ(est.rc, 0) << est.out;
+    const double k = ateReduction(known.out), e = ateReduction(est.out);
+    std::cout << "seed " << seed << ": median ATE reduction, known APs " << k
+              << " %, estimated APs " << e << " %\n";
+    // Measured (60 s, stride 2): seed 41 78 % / 43 %, seed 42 83 % / 56 %.
+    EXPECT_GE(k, e - 5) << known.out << est.out;
+    EXPECT_GT(k, 50) << known.out;
+    EXPECT_EQ(known.out.find("WARNING"), std::string::npos) << known.out;
+    if (!alsoWrongCalibration) return;
+    // The issue's trap: the scenario's own seed's calibration on a -s N recording. The
+    // bearings are biased by ~20 deg; wifi-graphslam must say so instead of a silent result.
+    r = run(ba + " --truth-calibration " + d + "/loop.yaml " + d + "/calib-other");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    r =
+        run(cb + " -q " + d + "/sim.rawlog " + d + "/b-other.rawlog --algo aoa_only --stride 8 " +
+            "--calib " + d + "/calib-other");
+    ASSERT_EQ(r.rc, 0) << r.out;
+    const auto other =
+        run(kBin + "/wifi-graphslam --no-plots -r " + d + "/b-other.rawlog --aps " + d +
+            "/truth/transmitters.yaml --no-aod --sensor-pose 0.1 0 0.4 0 0 0 -o " + d + "/other");
+    ASSERT_EQ(other.rc, 0) << other.out;
+    EXPECT_NE(other.out.find("WARNING   : the bearings disagree"), std::string::npos) << other.out;
+}
+}  // namespace
+
+TEST(LocalizationAppsGraphSlam, KnownApsAoaOnlyPipelineSeed41)
+{
+    knownVsEstimatedApsOnLoop(41, true);
+}
+TEST(LocalizationAppsGraphSlam, KnownApsAoaOnlyPipelineSeed42)
+{
+    knownVsEstimatedApsOnLoop(42, false);
+}
+
 TEST(LocalizationAppsIot, MapsDevicesAndReportsUnknownNames)
 {
     const auto& f = fixture();
@@ -360,6 +451,66 @@ TEST(LocalizationAppsIot, DevicesFromDriftingOdometryJointly)
             f.dir + "/iot-bad")
             .rc,
         1);
+}
+
+TEST(LocalizationAppsIot, TrustedOdometrySigmaCoversItsDrift)
+{
+    // Issue 11.3 / 12.2: the live device map (wifi-localize map_devices) is
+    // `wifi-iot-map --trust-odometry`: the odometry is taken as the trajectory, so the devices'
+    // sigma must include its drift (--odometry-drift), or the 95 % ellipses miss the devices
+    // (4 of 12 covered before). iot.yaml, odometry started at the true pose, seeds 61-63.
+    const std::string sim = kBin + "/wifi-sim";
+    if (!mrpt::system::fileExists(sim)) GTEST_SKIP() << "wifi-sim not built";
+    const std::string share = std::string(MRPT_WIFI_SOURCE_DIR) + "/share";
+    const std::string d = mrpt_wifi::test::tempPath("_iotdrift");
+    ASSERT_TRUE(mrpt::system::createDirectory(d));
+    size_t devices = 0, covered = 0;
+    std::vector<double> errs, sigmas;
+    for (const std::string seed : {"61", "62", "63"})
+    {
+        const std::string t = d + "/t" + seed;
+        ASSERT_EQ(
+            run(sim + " -q " + share + "/scenarios/iot.yaml " + d + "/s.rawlog -d 90 -s " + seed +
+                " -t " + t)
+                .rc,
+            0);
+        ASSERT_EQ(
+            run(kBin + "/wifi-bearings-synth " + t + "/frames.csv " + t + "/transmitters.yaml " +
+                d + "/b.csv --no-aod --rx-array " + share + "/arrays/rt-ac86u.yaml -s " + seed)
+                .rc,
+            0);
+        const auto r =
+            run(kBin + "/wifi-iot-map -q --no-plots -b " + d + "/b.csv --odometry-tum " + t +
+                "/odometry_tum.txt --trust-odometry --initial-pose \"2 1.5 0\" --sensor-pose "
+                "0.1 0 0.4 0 0 0 --truth " +
+                t + "/transmitters.yaml -o " + d + "/out" + seed);
+        ASSERT_EQ(r.rc, 0) << r.out;
+        EXPECT_NE(r.out.find("trajectory poses (trusted)"), std::string::npos) << r.out;
+        std::istringstream is(r.out);
+        for (std::string line; std::getline(is, line);)
+        {
+            double sx, sy, e;
+            const auto ps = line.find("sigma=("), pe = line.find("error=");
+            if (ps == std::string::npos || pe == std::string::npos) continue;
+            ASSERT_EQ(std::sscanf(line.c_str() + ps, "sigma=(%lf, %lf)", &sx, &sy), 2) << line;
+            ASSERT_EQ(std::sscanf(line.c_str() + pe, "error=%lf", &e), 1) << line;
+            ++devices;
+            errs.push_back(e);
+            sigmas.push_back(std::max(sx, sy));
+            // Inside the 95 % ellipse (chi-square, 2 dof: 5.99) of the (near-isotropic) sigma.
+            covered += e * e <= 5.99 * 0.5 * (sx * sx + sy * sy);
+        }
+    }
+    ASSERT_EQ(devices, 9u);
+    std::sort(errs.begin(), errs.end());
+    std::sort(sigmas.begin(), sigmas.end());
+    std::cout << covered << " of " << devices << " devices inside their 95 % ellipse; median "
+              << "error " << errs[4] << " m, median sigma " << sigmas[4] << " m\n";
+    // Measured: 9/9 covered, median error 0.09 m, sigma 0.11-0.19 m (without the drift term:
+    // sigma 0.05-0.09 m, the 0.16 m error of seed 61's camera outside).
+    EXPECT_GE(covered, 8u);
+    EXPECT_LE(errs[4], 0.2);
+    EXPECT_LE(sigmas.back(), 0.3);  // honest, not huge: the same order as the errors
 }
 
 TEST(LocalizationAppsCsv, CsiBearingsLeavesUnmeasuredCellsEmpty)

@@ -1,11 +1,13 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <gtest/gtest.h>
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/obs/CommandLine.h>
 
 #include <fstream>
 
@@ -205,4 +207,57 @@ TEST(LocalizationUnknownMotion, ConstantVelocityPredictsFromRecentEstimates)
     ConstantVelocityPrediction off(m);
     for (int i = 0; i <= 40; ++i) off.addEstimate(0.05 * i, {0.4 * 0.05 * i, 0, 0});
     EXPECT_EQ(off.predictIncrement(2.1), mrpt::poses::CPose2D());
+}
+
+TEST(CommandLineJoinedArgv, SeparateOrQuotedNumbersAndNothingMore)
+{
+    // `--initial-pose 2 1.5 0` and `--initial-pose "2 1.5 0"` are the same, and the quoted form
+    // must not swallow the options after it (it once ate `--odometry-drift 0 0`).
+    const auto joined = [](std::vector<std::string> a)
+    {
+        std::vector<char*> argv;
+        for (auto& s : a) argv.push_back(s.data());
+        mrpt_wifi::cli::JoinedArgv j(int(argv.size()), argv.data(), "--initial-pose", 3);
+        return std::vector<std::string>(j.argv(), j.argv() + j.argc());
+    };
+    using V = std::vector<std::string>;
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2", "1.5", "0", "-q"}),
+        V({"app", "--initial-pose", "2 1.5 0", "-q"}));
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2 1.5 0", "--odometry-drift", "0 0"}),
+        V({"app", "--initial-pose", "2 1.5 0", "--odometry-drift", "0 0"}));
+    EXPECT_EQ(
+        joined({"app", "--initial-pose", "2 1.5", "0", "-q"}),
+        V({"app", "--initial-pose", "2 1.5 0", "-q"}));
+    // Too few: what there is, for the pose parser to reject with its message.
+    EXPECT_EQ(joined({"app", "--initial-pose", "2"}), V({"app", "--initial-pose", "2"}));
+}
+
+TEST(ConstantVelocityPrediction, ForwardOnlyMovesAlongTheHeading)
+{
+    // Estimates drifting sideways (noise of the PF mean) while the robot faces +x at 0.5 m/s:
+    // the plain prediction carries the sideways motion on; forward_only keeps the speed along
+    // the heading only.
+    mrpt_wifi::localization::UnknownMotion m;
+    m.maxSpeed_mps = 1.0, m.velocityWindow_s = 1.0;
+    mrpt_wifi::localization::ConstantVelocityPrediction plain(m);
+    m.forwardOnly = true;
+    mrpt_wifi::localization::ConstantVelocityPrediction forward(m);
+    for (int k = 0; k <= 10; ++k)
+    {
+        const mrpt::math::TPose2D p(0.05 * k, 0.02 * k, 0);
+        plain.addEstimate(0.1 * k, p);
+        forward.addEstimate(0.1 * k, p);
+    }
+    const auto a = plain.predictIncrement(1.1), b = forward.predictIncrement(1.1);
+    EXPECT_NEAR(a.x(), 0.05, 1e-9);
+    EXPECT_NEAR(a.y(), 0.02, 1e-9);
+    EXPECT_NEAR(b.x(), 0.05, 1e-9);
+    EXPECT_NEAR(b.y(), 0.0, 1e-12);
+    // Read from the .ini like the other keys.
+    mrpt::config::CConfigFileMemory ini("[UnknownMotion]\nforward_only = true\n");
+    mrpt_wifi::localization::UnknownMotion r;
+    r.loadFromConfigFile(ini, "UnknownMotion");
+    EXPECT_TRUE(r.forwardOnly);
 }

@@ -68,7 +68,8 @@ inline PhaseCalibration truthCalibration(
     PhaseCalibration cal;
     cal.device = rx.name;
     cal.chanspec = cs;
-    cal.method = "simulator ground truth (scenario " + simulator.scenario().name + ")";
+    cal.method = "simulator ground truth (scenario " + simulator.scenario().name + ", seed " +
+                 std::to_string(simulator.scenario().seed) + ")";
     cal.subcarriers = dataSubcarriers(cs.bandwidthMHz);
     for (size_t i = 0; i < rx.size(); ++i)
     {

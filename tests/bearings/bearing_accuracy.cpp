@@ -4,10 +4,11 @@
  * kidnapped scenario. Prints Markdown tables.
  *
  *   bearing-accuracy [--estimates N] [--quick]
- *   bearing-accuracy --truth-calibration SCENARIO.yaml DIR
+ *   bearing-accuracy --truth-calibration SCENARIO.yaml DIR [--seed N]
  *     writes the simulator's true receiver offsets of every channel of the scenario as
  *     calibration files DIR/<device>/ch<C>_<BW>mhz.yaml (reference files for demos and for
- *     checking a calibration tool). */
+ *     checking a calibration tool). The offsets are drawn from the seed: a recording made with
+ *     `wifi-sim -s N` needs the same `--seed N` (the scenario's own seed otherwise). */
 #include <cstring>
 #include <iomanip>
 #include <iostream>
@@ -81,9 +82,28 @@ int main(int argc, char** argv)
 {
     unsigned estimates = 200;
     bool quick = false;
-    if (argc == 4 && !std::strcmp(argv[1], "--truth-calibration"))
+    if (argc >= 2 && !std::strcmp(argv[1], "--truth-calibration"))
     {
-        const sim::Scenario sc = sim::Scenario::fromYamlFile(argv[2]);
+        const bool withSeed = argc == 6 && !std::strcmp(argv[4], "--seed");
+        if (argc != 4 && !withSeed)
+        {
+            std::cerr << "usage: bearing-accuracy --truth-calibration SCENARIO.yaml DIR [--seed "
+                         "N]\n  (--seed: the seed given to wifi-sim -s; the receiver's phase "
+                         "offsets are drawn from it)\n";
+            return 1;
+        }
+        sim::Scenario sc = sim::Scenario::fromYamlFile(argv[2]);
+        if (withSeed)
+        {
+            char* end = nullptr;
+            const unsigned long seed = std::strtoul(argv[5], &end, 10);
+            if (end == argv[5] || *end != '\0')
+            {
+                std::cerr << "bearing-accuracy: --seed '" << argv[5] << "' is not a number\n";
+                return 1;
+            }
+            sc.seed = uint32_t(seed);
+        }
         sim::Simulator simulator(sc);
         const AntennaArray rx = fromSimArray(sc.receiver.array);
         for (const auto& t : sc.transmitters)
@@ -91,7 +111,7 @@ int main(int argc, char** argv)
             const PhaseCalibration cal = truthCalibration(simulator, rx, t.chanspec);
             const std::string path = PhaseCalibration::pathFor(argv[3], rx.name, t.chanspec);
             cal.saveYamlFile(path);
-            std::cout << "wrote " << path << "\n";
+            std::cout << "wrote " << path << " (seed " << sc.seed << ")\n";
         }
         return 0;
     }

@@ -74,6 +74,10 @@ struct GraphSlamResult
      *  deficient: an AP seen from too few places). */
     std::vector<std::array<double, 3>> apCov;
     bool apCovarianceOk = false;
+    /** Bearing edges whose residual at the solution is within 3 of their σ, the median
+     *  |residual|/σ and the median |residual| [deg]. Bearings from a calibrated receiver leave a
+     *  few degrees; biased ones (a calibration of another boot, antenna jumps) tens. */
+    double bearingsWithin3Sigma = 0, medianWhitenedResidual = 0, medianResidual_deg = 0;
     /** Known APs: which start won, and how many were optimised. */
     std::string placement;
     size_t hypotheses = 1;

@@ -20,6 +20,17 @@ struct BearingRay
     double sensorYaw = 0;                      //!< receive array yaw [rad]
     double aoa = 0, mirror = 0, sigma = 0.05;  //!< in the sensor frame [rad]
     bool ambiguous = false;
+    /** Uncertainty of the ray's origin when the trajectory is drifting odometry taken as exact
+     *  (addOdometryDrift): position σ [m] and heading σ [rad] since the trajectory's start. */
+    double poseStdXY = 0, poseStdYaw = 0;
+};
+
+/** Drift of dead-reckoning odometry: a random walk per metre travelled, as the simulator's
+ *  `odometry` section (`sigma_xy_m_per_sqrt_m`, `sigma_yaw_deg_per_sqrt_m`). */
+struct OdometryDrift
+{
+    double sigmaXY_perSqrtM = 0.01;    //!< position σ per √m travelled [m/√m]
+    double sigmaYaw_perSqrtM = 0.005;  //!< heading σ per √m travelled [rad/√m] (0.29°)
 };
 
 struct DeviceMapOptions
@@ -38,6 +49,11 @@ struct DeviceMapOptions
      *  covariance is inflated by N_inliers / N_eff, N_eff = distinct cells of this size visited by
      *  the inlier rays' origins, and by the reduced χ² of the inliers when above 1. */
     double decorrelation_m = 0.5;
+    /** With rays from a trajectory that is drifting odometry (BearingRay::poseStdXY/Yaw set by
+     *  addOdometryDrift), the covariance gains the pose uncertainty of the inlier rays: the mean
+     *  of σ_xy² + (range·σ_yaw)² over them, isotropic. The drift is common to all rays, so it
+     *  does not average out as the bearing noise does. */
+    bool includePoseUncertainty = true;
 };
 
 struct DeviceEstimate
@@ -49,6 +65,7 @@ struct DeviceEstimate
     double x = 0, y = 0;
     double cov[3] = {0, 0, 0};  //!< xx, xy, yy [m²] (Ceres covariance, inflated: see options)
     double covInflation = 1;    //!< factor applied to Ceres' covariance
+    double poseStd_m = 0;       //!< RMS pose uncertainty of the rays, added to cov (per axis)
     size_t rays = 0, inliers = 0;
     double medianResidual_deg = 0;
     double baseline_deg = 0;  //!< angular spread of the rays' directions at the estimate
@@ -60,6 +77,15 @@ struct DeviceEstimate
 std::map<MacAddress, std::vector<BearingRay>> raysFromBearings(
     const std::vector<BearingRecord>& bearings, const Trajectory2D& trajectory,
     InputWarnings* warnings = nullptr, double maxGap_s = 1.0);
+
+/** Sets the origin uncertainty of every ray (BearingRay::poseStdXY/Yaw) for a trajectory that
+ *  is dead-reckoning odometry taken as exact: after s metres travelled since the trajectory's
+ *  start, heading σ_φ² = σ_yaw²·s and position σ² per axis = σ_xy²·s + ½·σ_yaw²·∫₀^s |p(s) −
+ *  p(s')|² ds' (each heading error rotates the path driven after it: a loop back to the start
+ *  cancels it). A systematic scale error is not included. */
+void addOdometryDrift(
+    std::map<MacAddress, std::vector<BearingRay>>& rays, const Trajectory2D& trajectory,
+    const OdometryDrift& drift);
 
 /** Robust triangulation of one device: global grid search of the mixture likelihood (mirror
  *  candidates included), then Ceres refinement with a robust loss, then covariance. */

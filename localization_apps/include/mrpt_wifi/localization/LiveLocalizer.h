@@ -100,7 +100,9 @@ private:
  *  bearings stably sorted by time), so the map after the last observation equals
  *  `wifi-iot-map --rawlog` on that rawlog with the same options. Options: section
  *  `[wifi-localize]`, keys `map_devices` (bool), `map_min_std_deg`, `map_outlier_prob`,
- *  `map_loss`, `map_grid_m`, `map_update_period_s` (wifi-iot-map's defaults). */
+ *  `map_loss`, `map_grid_m`, `map_update_period_s`, `map_odometry_drift_xy` [m/√m] and
+ *  `map_odometry_drift_yaw_deg` [deg/√m] (wifi-iot-map --trust-odometry's defaults: the
+ *  odometry's drift enters the devices' σ, see addOdometryDrift). */
 class LiveDeviceMapper
 {
 public:
@@ -126,6 +128,7 @@ private:
     bool enabled_ = false;
     double updatePeriod_s_ = 2.0;
     DeviceMapOptions opts_;
+    OdometryDrift drift_;  //!< map_odometry_drift_xy, map_odometry_drift_yaw_deg
     std::vector<std::pair<double, mrpt::math::TPose2D>> odometry_;
     std::vector<BearingRecord> bearings_;
     std::vector<DeviceEstimate> devices_;

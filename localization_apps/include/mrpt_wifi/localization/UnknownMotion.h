@@ -42,6 +42,10 @@ struct UnknownMotion
      *  zero-mean walk: a pure random walk lags behind a moving robot. */
     bool constantVelocity = true;
     double velocityWindow_s = 1.0;  //!< estimates this far back give the velocity [s]
+    /** A robot that drives along its heading (differential drive, car): the predicted increment
+     *  is the forward speed only, each particle moving along its own heading (no sideways
+     *  component from the noise of the estimates). */
+    bool forwardOnly = false;
 
     /** σ of the position change per axis [m] and of the heading change [rad] over `dt_s`. */
     double stdXY(double dt_s) const;
