@@ -68,12 +68,15 @@ BearingTracker::Decision BearingTracker::update(
     dec.predicted_rad = linear ? wrapAngle(broadside + tr.angle) : tr.angle;
     dec.trackStd_rad = std::sqrt(tr.var);
     dec.support = tr.hits;
-    dec.confident = tr.hits >= opts_.minHits && std::sqrt(tr.var) <= opts_.maxTrackStd_rad;
+    // An established track decides between the window's candidates; a narrow one is also
+    // sure enough to widen the σ of a bearing it contradicts.
+    const bool established = tr.hits >= opts_.minHits;
+    dec.confident = established && std::sqrt(tr.var) <= opts_.maxTrackStd_rad;
 
     const double d0 = std::abs(difference(z0, tr.angle));
     size_t chosen = 0;
     double dc = d0;
-    if (dec.confident && d0 > gate)
+    if (established && d0 > gate)
         for (size_t k = 1; k < candidates.size(); ++k)
         {
             if (candidates[k].relativePower < opts_.minCandidatePower) continue;
@@ -85,7 +88,10 @@ BearingTracker::Decision BearingTracker::update(
         // Nothing the window supports fits the track.
         dec.miss = true;
         dec.disagreement_rad = d0;
-        if (++tr.misses >= opts_.maxMisses || !dec.confident)
+        // A window that says itself it can't tell (σ beyond ambiguousStd_rad) doesn't count
+        // against the track.
+        if (std_rad <= opts_.ambiguousStd_rad) ++tr.misses;
+        if (tr.misses >= opts_.maxMisses || !established)
         {
             // The track is lost (or was never sure): start over from the window.
             tr.angle = z0;

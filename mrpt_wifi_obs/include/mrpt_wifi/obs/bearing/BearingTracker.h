@@ -34,7 +34,8 @@ struct BearingCandidate
  * range being unknown); without odometry by `noOdometryRate`² Δt. A window's bearing that
  * falls outside the track's gate while another direction the window supports falls inside is
  * replaced by that one; a window with nothing inside the gate keeps its own bearing, counts as
- * a miss and gets a σ that reaches the track; `maxMisses` misses in a row start the track
+ * a miss (unless its own σ says it is ambiguous) and, if the track is narrow, gets a σ that
+ * reaches the track; `maxMisses` misses in a row start the track
  * over from the window's bearing. Not thread-safe. */
 class BearingTracker
 {
@@ -49,10 +50,12 @@ public:
         double minCandidatePower = 0.3;         //!< other directions weaker than this are ignored
         double minStd_rad = 1.0 * M_PI / 180;   //!< floor of a window's σ in the update
         double maxStd_rad = 10.0 * M_PI / 180;  //!< cap of a window's σ in the update
-        double maxTrackStd_rad = 12.0 * M_PI / 180;  //!< a wider track decides nothing
+        double maxTrackStd_rad = 12.0 * M_PI / 180;  //!< a wider track widens no σ
         unsigned minHits = 3;                        //!< windows a track needs before it decides
         unsigned maxMisses = 3;                      //!< misses in a row that start the track over
-        double forgetAfter_s = 3.0;                  //!< a track unseen this long starts over
+        /** A window with a σ beyond this says it can't tell: its miss doesn't count. */
+        double ambiguousStd_rad = 30.0 * M_PI / 180;
+        double forgetAfter_s = 3.0;  //!< a track unseen this long starts over
     };
 
     /** What the track says about one window. */
