@@ -80,7 +80,13 @@ BearingTracker::Decision BearingTracker::update(
         for (size_t k = 1; k < candidates.size(); ++k)
         {
             if (candidates[k].relativePower < opts_.minCandidatePower) continue;
-            const double d = std::abs(difference(toTrack(candidates[k].theta_rad), tr.angle));
+            const double zk = toTrack(candidates[k].theta_rad);
+            // Linear arrays: only the other endfire replaces a bearing near one endfire (a
+            // track that followed a reflection must not overrule a clean central bearing).
+            if (linear && (std::abs(z0) < opts_.endfireZone_rad ||
+                           std::abs(zk) < opts_.endfireZone_rad || zk * z0 > 0))
+                continue;
+            const double d = std::abs(difference(zk, tr.angle));
             if (d < dc) dc = d, chosen = k;
         }
     if (dc > gate)

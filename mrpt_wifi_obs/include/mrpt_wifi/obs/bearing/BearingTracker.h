@@ -33,7 +33,8 @@ struct BearingCandidate
  * which direction the rotation moves the folded angle, plus (Δs / `assumedRange_m`)², the
  * range being unknown); without odometry by `noOdometryRate`² Δt. A window's bearing that
  * falls outside the track's gate while another direction the window supports falls inside is
- * replaced by that one; a window with nothing inside the gate keeps its own bearing, counts as
+ * replaced by that one (for a linear array only a bearing near one endfire by one near the
+ * other); a window with nothing inside the gate keeps its own bearing, counts as
  * a miss (unless its own σ says it is ambiguous) and, if the track is narrow, gets a σ that
  * reaches the track; `maxMisses` misses in a row start the track
  * over from the window's bearing. Not thread-safe. */
@@ -55,6 +56,9 @@ public:
         unsigned maxMisses = 3;                      //!< misses in a row that start the track over
         /** A window with a σ beyond this says it can't tell: its miss doesn't count. */
         double ambiguousStd_rad = 30.0 * M_PI / 180;
+        /** Linear arrays: the track swaps a bearing only for one near the other endfire,
+         *  both at least this far from broadside (the aliasing the array's spacing allows). */
+        double endfireZone_rad = 55.0 * M_PI / 180;
         double forgetAfter_s = 3.0;  //!< a track unseen this long starts over
     };
 
