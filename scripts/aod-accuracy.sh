@@ -4,7 +4,7 @@
 #   scripts/aod-accuracy.sh BUILD_DIR WORK_DIR SEED...
 # Per seed: an 80 s drive of share/scenarios/kidnapped.yaml, cut at t = 40 s; wifi-calibrate
 # --transmit-chains on the first half with true poses (TUM) and with the drive's odometry;
-# csi-bearings --algo aod --calib on the second half (every 2nd frame); AoD errors against
+# csi-bearings --algo aod --calib on the second half (every 2nd frame; STRIDE=N in the environment to change); AoD errors against
 # the simulator's truth (frames.csv). Prints one line per seed and pose source, then the pooled
 # figures. Needs ~2 GB of free space in WORK_DIR per seed while it runs.
 set -euo pipefail
@@ -23,7 +23,7 @@ for seed in "$@"; do
         nice "$build/bin/wifi-calibrate" cal$seed.rawlog --array "$src/share/arrays/rt-ac86u.yaml" \
             --transmitters truth$seed/transmitters.yaml "${p[@]}" --transmit-chains --out calib$seed-$poses -q >/dev/null
         nice "$build/bin/csi-bearings" test$seed.rawlog /dev/null --algo aod --calib calib$seed-$poses \
-            --tx-array "$src/share/arrays/ap-linear-4.yaml" --csv aod$seed-$poses.csv -q --stride 2 >/dev/null
+            --tx-array "$src/share/arrays/ap-linear-4.yaml" --csv aod$seed-$poses.csv -q --stride "${STRIDE:-2}" >/dev/null
     done
     rm -f cal$seed.rawlog test$seed.rawlog
 done

@@ -4,6 +4,11 @@
  * kidnapped scenario. Prints Markdown tables.
  *
  *   bearing-accuracy [--estimates N] [--quick]
+ *   bearing-accuracy --rooms N [--development] ...
+ *     the random-room tables (windows sampled over each room's drive, each estimated alone)
+ *   bearing-accuracy --rooms N --stream [--poses truth|odometry|drifting|none] ...
+ *     whole streams: each room's odometry and CSI in time order through BearingProcessor, as
+ *     csi-bearings runs them, so per-transmitter tracking sees the stream
  *   bearing-accuracy --truth-calibration SCENARIO.yaml DIR
  *     writes the simulator's true receiver offsets of every channel of the scenario as
  *     calibration files DIR/<device>/ch<C>_<BW>mhz.yaml (reference files for demos and for
@@ -215,6 +220,11 @@ int main(int argc, char** argv)
             sc.stride = unsigned(std::max(1, std::atoi(argv[++i])));
             continue;
         }
+        if (!std::strcmp(argv[i], "--los"))
+        {
+            sc.base.environment = Environment::LineOfSight;
+            continue;
+        }
         if (!std::strcmp(argv[i], "--dump") && i + 1 < argc)
         {
             dumpFile = argv[++i];
@@ -244,7 +254,7 @@ int main(int argc, char** argv)
                    "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n"
                    "       bearing-accuracy --rooms N --stream [--development] [--snr DB] "
                    "[--algo NAME]... [--params YAML] [--poses truth|odometry|drifting|none] "
-                   "[--tracking on|off] [--duration S] [--stride N] [--dump CSV]\n";
+                   "[--tracking on|off] [--duration S] [--stride N] [--los] [--dump CSV]\n";
             return 1;
         }
     }
