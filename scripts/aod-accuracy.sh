@@ -12,18 +12,23 @@ build=$(realpath "$1"); work=$2; shift 2
 src=$(cd "$(dirname "$0")/.." && pwd)
 mkdir -p "$work"; cd "$work"
 plugin="$build/lib/libmrpt_wifi_obs.so"
+# Resumable: steps whose outputs exist are skipped.
 for seed in "$@"; do
-    nice "$build/bin/wifi-sim" "$src/share/scenarios/kidnapped.yaml" d$seed.rawlog \
-        --truth-dir truth$seed --seed $seed --duration 80 -q
-    nice rawlog-edit -p "$plugin" --cut -i d$seed.rawlog -o cal$seed.rawlog --to-time 1700000040 -w -q >/dev/null 2>&1
-    nice rawlog-edit -p "$plugin" --cut -i d$seed.rawlog -o test$seed.rawlog --from-time 1700000040 -w -q >/dev/null 2>&1
-    rm -f d$seed.rawlog
+    if [ ! -f aod$seed-odometry.csv ] && [ ! -f test$seed.rawlog ]; then
+        nice "$build/bin/wifi-sim" "$src/share/scenarios/kidnapped.yaml" d$seed.rawlog \
+            --truth-dir truth$seed --seed $seed --duration 80 -q
+        nice rawlog-edit -p "$plugin" --cut -i d$seed.rawlog -o cal$seed.rawlog --to-time 1700000040 -w -q >/dev/null 2>&1
+        nice rawlog-edit -p "$plugin" --cut -i d$seed.rawlog -o test$seed.rawlog --from-time 1700000040 -w -q >/dev/null 2>&1
+        rm -f d$seed.rawlog
+    fi
     for poses in truth odometry; do
+        [ -f aod$seed-$poses.csv ] && continue
         if [ $poses = truth ]; then p=(--poses truth$seed/trajectory_tum.txt); else p=(--poses odometry --odom-origin 5.0 2.5 0); fi
-        nice "$build/bin/wifi-calibrate" cal$seed.rawlog --array "$src/share/arrays/rt-ac86u.yaml" \
+        [ -d calib$seed-$poses ] || nice "$build/bin/wifi-calibrate" cal$seed.rawlog --array "$src/share/arrays/rt-ac86u.yaml" \
             --transmitters truth$seed/transmitters.yaml "${p[@]}" --transmit-chains --out calib$seed-$poses -q >/dev/null
         nice "$build/bin/csi-bearings" test$seed.rawlog /dev/null --algo aod --calib calib$seed-$poses \
-            --tx-array "$src/share/arrays/ap-linear-4.yaml" --csv aod$seed-$poses.csv -q --stride "${STRIDE:-2}" >/dev/null
+            --tx-array "$src/share/arrays/ap-linear-4.yaml" --csv aod$seed-$poses.csv.part -q --stride "${STRIDE:-2}" >/dev/null
+        mv aod$seed-$poses.csv.part aod$seed-$poses.csv
     done
     rm -f cal$seed.rawlog test$seed.rawlog
 done
