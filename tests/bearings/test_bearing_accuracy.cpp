@@ -182,8 +182,8 @@ TEST(BearingAccuracyStream, TrackingKeepsEndfireAliasesRare)
               << "\ntracking off: >30° all " << off.beyond30 << " central " << off.centralBeyond30
               << "\n";
     ASSERT_GE(on.count, 1000u);
-    EXPECT_LE(on.beyond30, 0.045);
-    EXPECT_LE(on.beyond30, off.beyond30);
+    EXPECT_LE(on.beyond30, 0.035);  // without tracking 3.8 %: this fails
+    EXPECT_LT(on.beyond30, off.beyond30);
     EXPECT_LE(on.centralMedian_deg, 1.5);
     EXPECT_GE(on.withinThreeSigma, 0.95);
     EXPECT_GE(on.withinTwoSigma, 0.80);
