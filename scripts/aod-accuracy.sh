@@ -25,7 +25,8 @@ for seed in "$@"; do
         [ -f aod$seed-$poses.csv ] && continue
         if [ $poses = truth ]; then p=(--poses truth$seed/trajectory_tum.txt); else p=(--poses odometry --odom-origin 5.0 2.5 0); fi
         [ -d calib$seed-$poses ] || nice "$build/bin/wifi-calibrate" cal$seed.rawlog --array "$src/share/arrays/rt-ac86u.yaml" \
-            --transmitters truth$seed/transmitters.yaml "${p[@]}" --transmit-chains --out calib$seed-$poses -q >/dev/null
+            --transmitters truth$seed/transmitters.yaml "${p[@]}" --transmit-chains --out calib$seed-$poses -q >/dev/null ||
+            echo "seed $seed, $poses poses: wifi-calibrate left some transmitter uncalibrated (no AoD for it)" >&2
         nice "$build/bin/csi-bearings" test$seed.rawlog /dev/null --algo aod --calib calib$seed-$poses \
             --tx-array "$src/share/arrays/ap-linear-4.yaml" --csv aod$seed-$poses.csv.part -q --stride "${STRIDE:-2}" >/dev/null
         mv aod$seed-$poses.csv.part aod$seed-$poses.csv
