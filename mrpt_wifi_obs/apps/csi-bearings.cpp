@@ -151,6 +151,12 @@ int main(int argc, char** argv)
                 "(wifi-calibrate --transmit-chains); such angles are off by tens of degrees on "
                 "real access points",
                 cmd);
+            TCLAP::ValueArg<std::string> argTracking(
+                "", "tracking",
+                "Per-transmitter tracking over time (on/off; default: on for the default "
+                "estimator): a window's bearing near one endfire that the transmitter's track "
+                "puts at the other is replaced by that one",
+                false, "", "on|off", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Also write the bearings as CSV", false, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argImages(
@@ -197,6 +203,13 @@ int main(int argc, char** argv)
             if (argRequireCalib.getValue()) pre.requireCalibration = true;
             if (argStride.isSet()) cfg.window.stride = std::max(1u, argStride.getValue());
             if (argUncalibratedAod.getValue()) cfg.window.uncalibratedAod = true;
+            if (argTracking.isSet())
+            {
+                const std::string& t = argTracking.getValue();
+                if (t != "on" && t != "off")
+                    throw std::invalid_argument("--tracking: 'on' or 'off', not '" + t + "'");
+                cfg.window.tracking = t == "on";
+            }
             CsiPreprocessor preprocessor(pre, rxArray, calib);
 
             bearing::BearingProcessor processor(

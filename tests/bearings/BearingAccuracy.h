@@ -5,6 +5,7 @@
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 #include <mrpt_wifi/sim/RandomRoom.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
@@ -99,7 +100,9 @@ inline AccuracyDataset makeRandomRoomDataset(
     return makeDataset(c, sim::randomRoomScenario(seed, ro));
 }
 
-inline AccuracyDataset makeDataset(const AccuracyCase& c, sim::Scenario sc)
+/** The case's environment, SNR and receive array applied to a scenario; transmit chains
+ *  without phase or gain offsets (as if calibrated). */
+inline void applyCase(const AccuracyCase& c, sim::Scenario& sc)
 {
     if (!c.rxArrayFile.empty()) sc.receiver.array = sim::AntennaArray::fromYamlFile(c.rxArrayFile);
     sc.impairments.fixedSnr_dB = c.snr_dB;
@@ -119,6 +122,11 @@ inline AccuracyDataset makeDataset(const AccuracyCase& c, sim::Scenario sc)
         for (auto& w : sc.walls) w.reflection = std::polar(0.7, M_PI);
         for (auto& s : sc.scatterers) s.radarCrossSection_m2 *= 4;
     }
+}
+
+inline AccuracyDataset makeDataset(const AccuracyCase& c, sim::Scenario sc)
+{
+    applyCase(c, sc);
     sim::Simulator simulator(sc);
 
     AccuracyDataset d;
@@ -307,6 +315,12 @@ struct ErrorRecord
     double std_deg = NAN;    //!< reported σ
     double crb_deg = NAN;
     bool central = false;  //!< truth within 75° of broadside
+    // Whole-stream records only (streamErrors):
+    double time_s = NAN, truth_deg = NAN, estimate_deg = NAN;
+    int transmitter = -1;
+    int trackChoice = -1;  //!< candidate the tracker chose (0: the estimator's)
+    double trackSupport = NAN;
+    double yaw_deg = NAN;  //!< odometry yaw the processor had at the estimate
 };
 
 /** Runs an estimator over a dataset and appends one record per estimate it made; returns the
@@ -333,6 +347,118 @@ inline size_t collectErrors(
             rec.central = offBroadside <= 75 * M_PI / 180;
             out.push_back(rec);
         });
+}
+
+/** Where a whole-stream evaluation takes the robot's motion from. */
+enum class StreamPoses
+{
+    None,             //!< no odometry at all (as the live sensor without an odometry source)
+    Truth,            //!< the true robot poses
+    Odometry,         //!< the scenario's wheel odometry (noisy)
+    DriftingOdometry  //!< wheel odometry with 2 % scale errors and 1°/m heading drift
+};
+inline const char* toString(StreamPoses p)
+{
+    return p == StreamPoses::None       ? "no odometry"
+           : p == StreamPoses::Truth    ? "true poses"
+           : p == StreamPoses::Odometry ? "odometry poses"
+                                        : "drifting odometry poses";
+}
+
+struct StreamCase
+{
+    AccuracyCase base;  //!< environment, SNR, receive array (estimates/windowFrames unused)
+    StreamPoses poses = StreamPoses::Truth;
+    double duration_s = 30;  //!< of the scenario streamed, from its start
+    unsigned stride = 8;     //!< one estimate per transmitter every `stride` frames
+    /** BearingProcessor::Options::tracking (nullopt: the processor's default). */
+    std::optional<bool> tracking;
+};
+
+/** Whole-stream evaluation: one random room's odometry and CSI in time order through one
+ *  BearingProcessor per algorithm (as csi-bearings runs them), every estimate against the
+ *  truth of its newest frame; appends one record per estimate to out[algo]. Returns the number
+ *  of frames streamed. */
+inline size_t streamErrors(
+    const StreamCase& c, uint32_t seed, const std::vector<std::string>& algos,
+    const mrpt::containers::yaml& params, std::map<std::string, std::vector<ErrorRecord>>& out)
+{
+    sim::RandomRoomOptions ro;
+    ro.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
+    ro.duration_s = std::max(c.duration_s, 1.0);
+    sim::Scenario sc = sim::randomRoomScenario(seed, ro);
+    applyCase(c.base, sc);
+    if (c.poses == StreamPoses::DriftingOdometry)
+    {
+        sc.odometry.scaleError = 0.02;
+        sc.odometry.yawScaleError = 0.02;
+        sc.odometry.yawDrift_rad_per_m = 1.0 * M_PI / 180;
+    }
+    sim::Simulator simulator(sc);
+    const AntennaArray rx = fromSimArray(sc.receiver.array);
+    const PhaseCalibration cal = truthCalibration(simulator, rx, sc.transmitters.front().chanspec);
+    std::vector<std::unique_ptr<bearing::BearingProcessor>> procs;
+    for (const auto& a : algos)
+    {
+        bearing::BearingProcessor::Options o;
+        o.stride = c.stride;
+        o.tracking = c.tracking;
+        procs.push_back(std::make_unique<bearing::BearingProcessor>(
+            CsiPreprocessor({}, rx, CalibrationStore::fromCalibration(cal)),
+            bearing::createEstimator(a, params), o));
+        for (const auto& t : sc.transmitters)
+            procs.back()->setTransmitterArray(t.mac, fromSimArray(t.array));
+    }
+    const double snr = std::pow(10.0, c.base.snr_dB / 10);
+    sim::SimEvent ev;
+    size_t frames = 0;
+    while (simulator.next(ev))
+    {
+        if (ev.kind == sim::SimEvent::Kind::Odometry)
+        {
+            if (c.poses == StreamPoses::None) continue;
+            const auto pose =
+                c.poses == StreamPoses::Truth ? ev.truePose : ev.odometry->odometry.asTPose();
+            for (auto& p : procs) p->addOdometry(ev.odometry->timestamp, pose);
+            continue;
+        }
+        ++frames;
+        const sim::FrameTruth& truth = ev.frame;
+        for (size_t k = 0; k < procs.size(); ++k)
+        {
+            const auto b = procs[k]->process(*ev.csi);
+            if (!b) continue;
+            double err = angleDistance(b->aoa_rad, truth.aoa_rad);
+            if (b->aoaAmbiguous)
+                err = std::min(err, angleDistance(b->aoaMirror_rad, truth.aoa_rad));
+            double streams = 0;
+            for (const auto* f : procs[k]->lastWindow()) streams += f->nTx;
+            ErrorRecord rec;
+            rec.error_deg = err * 180 / M_PI;
+            rec.std_deg = b->aoaStd_rad * 180 / M_PI;
+            rec.crb_deg =
+                rx.aoaCramerRaoBound(
+                    truth.aoa_rad, procs[k]->lastFrame()->layout->frequencies_Hz, snr, streams) *
+                180 / M_PI;
+            const double offBroadside = std::min(
+                angleDistance(truth.aoa_rad, rx.broadside()),
+                angleDistance(rx.mirrorOf(truth.aoa_rad), rx.broadside()));
+            rec.central = offBroadside <= 75 * M_PI / 180;
+            rec.time_s = truth.time_s;
+            rec.transmitter = int(truth.transmitterIndex);
+            rec.truth_deg = truth.aoa_rad * 180 / M_PI;
+            rec.estimate_deg = b->aoa_rad * 180 / M_PI;
+            if (const auto od = procs[k]->odometryAt(ev.csi->timestamp); od)
+                rec.yaw_deg = od->phi * 180 / M_PI;
+            if (procs[k]->tracking())
+            {
+                rec.trackChoice = int(procs[k]->lastTrackDecision().chosen);
+                rec.trackSupport = procs[k]->lastTrackDecision().support;
+            }
+            out[algos[k]].push_back(rec);
+        }
+    }
+    return frames;
 }
 
 /** The issue-10 figures over many rooms. */

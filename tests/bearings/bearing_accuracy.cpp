@@ -4,12 +4,18 @@
  * kidnapped scenario. Prints Markdown tables.
  *
  *   bearing-accuracy [--estimates N] [--quick]
+ *   bearing-accuracy --rooms N [--development] [--receiver rt-ac86u|intel5300] ...
+ *     the random-room tables (windows sampled over each room's drive, each estimated alone)
+ *   bearing-accuracy --rooms N --stream [--poses truth|odometry|drifting|none] ...
+ *     whole streams: each room's odometry and CSI in time order through BearingProcessor, as
+ *     csi-bearings runs them, so per-transmitter tracking sees the stream
  *   bearing-accuracy --truth-calibration SCENARIO.yaml DIR [--seed N]
  *     writes the simulator's true receiver offsets of every channel of the scenario as
  *     calibration files DIR/<device>/ch<C>_<BW>mhz.yaml (reference files for demos and for
  *     checking a calibration tool). The offsets are drawn from the seed: a recording made with
  *     `wifi-sim -s N` needs the same `--seed N` (the scenario's own seed otherwise). */
 #include <cstring>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 
@@ -76,6 +82,72 @@ int roomTables(
     }
     return 0;
 }
+/** Whole-stream tables: every room's odometry and CSI in time order through BearingProcessor
+ *  (so per-transmitter tracking sees the stream), moderate multipath. */
+int streamTables(
+    unsigned rooms, bool evaluation, const std::vector<double>& snrs,
+    const std::vector<std::string>& algos, const std::string& params, StreamCase c,
+    const std::string& dumpFile)
+{
+    const auto seeds = roomSeeds(evaluation, rooms);
+    std::ofstream dump;
+    if (!dumpFile.empty())
+    {
+        dump.open(dumpFile);
+        if (!dump) throw std::runtime_error("cannot write '" + dumpFile + "'");
+        dump << "seed,algo,snr_db,time_s,tx,truth_deg,estimate_deg,error_deg,std_deg,central,"
+                "track_choice,track_support,yaw_deg\n";
+    }
+    std::cout << std::fixed << std::setprecision(2);
+    std::cout << "# AoA accuracy over whole streams: " << rooms << " random rooms ("
+              << (evaluation ? "evaluation" : "development") << " seeds " << seeds.front() << "–"
+              << seeds.back() << "), first " << c.duration_s << " s of each, one estimate per "
+              << "transmitter every " << c.stride << " frames, " << toString(c.poses)
+              << ", tracking "
+              << (c.tracking ? (*c.tracking ? "on" : "off") : "default (on for `default`)") << ", "
+              << toString(c.base.environment) << ", true receiver offsets\n\n"
+              << "| estimator | SNR [dB] | median (central) | p90 (central) | >30° (central) "
+                 "| >30° (all) | median (all) | ≤2σ | ≤3σ | median σ (central / all) | CRB | "
+                 "estimates |\n"
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (double snr : snrs)
+    {
+        c.base.snr_dB = snr;
+        std::map<std::string, std::vector<ErrorRecord>> recs;
+        for (uint32_t seed : seeds)
+        {
+            std::map<std::string, std::vector<ErrorRecord>> room;
+            streamErrors(c, seed, algos, mrpt::containers::yaml::FromText(params), room);
+            std::cerr << "." << std::flush;
+            for (auto& [a, v] : room)
+            {
+                for (const auto& r : v)
+                    if (dump)
+                        dump << seed << "," << a << "," << snr << "," << r.time_s << ","
+                             << r.transmitter << "," << r.truth_deg << "," << r.estimate_deg << ","
+                             << r.error_deg << "," << r.std_deg << "," << r.central << ","
+                             << r.trackChoice << "," << r.trackSupport << "," << r.yaw_deg << "\n";
+                recs[a].insert(recs[a].end(), v.begin(), v.end());
+            }
+        }
+        std::cerr << "\n";
+        for (const auto& n : algos)
+        {
+            const RoomStats s = summarize(recs[n]);
+            std::cout << "| " << n << " | " << std::setprecision(0) << snr << std::setprecision(2)
+                      << " | " << s.centralMedian_deg << " | " << s.centralP90_deg << " | "
+                      << std::setprecision(1) << 100 * s.centralBeyond30 << " % | "
+                      << 100 * s.beyond30 << " % | " << std::setprecision(2) << s.median_deg
+                      << " | " << std::setprecision(1) << 100 * s.withinTwoSigma << " % | "
+                      << 100 * s.withinThreeSigma << " % | " << std::setprecision(2)
+                      << s.centralMedianStd_deg << " / " << s.medianStd_deg << " | "
+                      << std::setprecision(3) << s.crbMedian_deg << " | " << s.count << " |\n"
+                      << std::flush;
+        }
+    }
+    std::cout << "\n";
+    return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -122,8 +194,65 @@ int main(int argc, char** argv)
     std::string params = "{}";
     unsigned windowFrames = 8;
     std::string receiver = "rt-ac86u";
+    bool stream = false;
+    StreamCase sc;
+    std::string dumpFile;
     for (int i = 1; i < argc; ++i)
     {
+        if (!std::strcmp(argv[i], "--stream"))
+        {
+            stream = true;
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--poses") && i + 1 < argc)
+        {
+            const std::string p = argv[++i];
+            if (p == "truth")
+                sc.poses = StreamPoses::Truth;
+            else if (p == "odometry")
+                sc.poses = StreamPoses::Odometry;
+            else if (p == "drifting")
+                sc.poses = StreamPoses::DriftingOdometry;
+            else if (p == "none")
+                sc.poses = StreamPoses::None;
+            else
+            {
+                std::cerr << "--poses: truth, odometry, drifting or none, not '" << p << "'\n";
+                return 1;
+            }
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--tracking") && i + 1 < argc)
+        {
+            const std::string t = argv[++i];
+            if (t != "on" && t != "off")
+            {
+                std::cerr << "--tracking: on or off, not '" << t << "'\n";
+                return 1;
+            }
+            sc.tracking = t == "on";
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--duration") && i + 1 < argc)
+        {
+            sc.duration_s = std::atof(argv[++i]);
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--stride") && i + 1 < argc)
+        {
+            sc.stride = unsigned(std::max(1, std::atoi(argv[++i])));
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--los"))
+        {
+            sc.base.environment = Environment::LineOfSight;
+            continue;
+        }
+        if (!std::strcmp(argv[i], "--dump") && i + 1 < argc)
+        {
+            dumpFile = argv[++i];
+            continue;
+        }
         if (!std::strcmp(argv[i], "--estimates") && i + 1 < argc)
             estimates = unsigned(std::atoi(argv[++i]));
         else if (!std::strcmp(argv[i], "--quick"))
@@ -150,9 +279,23 @@ int main(int argc, char** argv)
                 << "usage: bearing-accuracy [--estimates N] [--quick]\n"
                    "       bearing-accuracy --rooms N [--development] [--estimates "
                    "PER_ROOM] [--snr DB] [--algo NAME]... [--params YAML] [--window-frames N]\n"
-                   "         [--receiver rt-ac86u|intel5300]\n";
+                   "         [--receiver rt-ac86u|intel5300]\n"
+                   "       bearing-accuracy --rooms N --stream [--development] [--snr DB] "
+                   "[--algo NAME]... [--params YAML] [--poses truth|odometry|drifting|none] "
+                   "[--tracking on|off] [--duration S] [--stride N] [--los] [--dump CSV]\n";
             return 1;
         }
+    }
+    if (rooms > 0 && stream)
+    {
+        if (receiver != "rt-ac86u")
+        {
+            std::cerr << "--receiver: the stream tables simulate the RT-AC86U only\n";
+            return 1;
+        }
+        if (algos.empty()) algos = {"default", "fft"};
+        if (snrs.size() == 4) snrs = {10, 25, 30};
+        return streamTables(rooms, !development, snrs, algos, params, sc, dumpFile);
     }
     if (rooms > 0)
     {

@@ -5,16 +5,103 @@
 #include <algorithm>
 #include <cmath>
 
+#include "BearingMath.h"
+
 namespace mrpt_wifi::bearing
 {
+/** Workspace of findCandidates(): the wideband Bartlett spectrum of a window. */
+struct BearingProcessor::CandidateScan
+{
+    const SubcarrierLayout* layout = nullptr;
+    unsigned nRx = 0;
+    AntennaArray rx;
+    detail::AngleGrid grid;
+    std::vector<double> gf, gc;
+    detail::QuadraticFormGrid qf;
+    std::vector<Eigen::MatrixXcd> R;
+    Eigen::VectorXd spec;
+};
+
 BearingProcessor::BearingProcessor(
     CsiPreprocessor preprocessor, std::unique_ptr<BearingEstimator> estimator, Options options)
     : pre_(std::move(preprocessor)),
       est_(std::move(estimator)),
       opts_(options),
       windows_(
-          std::max(options.windowCapacity, est_ ? est_->framesWanted() : 1), options.windowMaxAge_s)
+          std::max(options.windowCapacity, est_ ? est_->framesWanted() : 1),
+          options.windowMaxAge_s),
+      tracking_(options.tracking.value_or(est_ && est_->name() == "default")),
+      tracker_(options.tracker),
+      scan_(std::make_unique<CandidateScan>())
 {
+}
+
+BearingProcessor::~BearingProcessor() = default;
+BearingProcessor::BearingProcessor(BearingProcessor&&) noexcept = default;
+BearingProcessor& BearingProcessor::operator=(BearingProcessor&&) noexcept = default;
+
+void BearingProcessor::findCandidates(const BearingResult& res)
+{
+    constexpr unsigned kBins = 180, kGroups = 4;
+    constexpr size_t kMaxPeaks = 6;
+    candidates_.clear();
+    const CleanCsi& f = *frames_.back();
+    CandidateScan& s = *scan_;
+    if (s.layout != f.layout.get() || s.nRx != f.nRx)
+    {
+        s.layout = f.layout.get();
+        s.nRx = f.nRx;
+        s.rx = pre_.rxArray().firstElements(f.nRx);
+        s.grid = detail::AngleGrid::make(s.rx, f.nRx, kBins);
+        detail::groupFrequencies(*f.layout, kGroups, s.gf, s.gc);
+        s.qf.prepare(s.rx, f.nRx, s.grid, s.gf);
+    }
+    if (res.hasDelay)
+        detail::delayFilteredCovariances(frames_, res.delay_s, kGroups, s.R);
+    else
+        detail::sumCovariances(frames_, kGroups, false, s.R);
+    s.qf.evaluate(s.R, s.spec);
+    const double pMax = s.spec.maxCoeff();
+    if (!(pMax > 0))
+    {
+        candidates_.push_back({res.aoa_rad, 1.0});
+        return;
+    }
+    const double p0 = detail::groupedForm(s.rx, f.nRx, res.aoa_rad, s.gf, s.R);
+    candidates_.push_back({res.aoa_rad, std::clamp(p0 / pMax, 0.0, 1.0)});
+    const bool linear = s.rx.size() >= 2 && s.rx.isLinear();
+    for (size_t i : detail::findPeaks1D(s.spec, s.grid.circular, kMaxPeaks))
+    {
+        const double theta = s.grid.at(detail::refinePeak1D(s.spec, i, s.grid.circular));
+        double d = angleDistance(theta, res.aoa_rad);
+        if (linear) d = std::min(d, angleDistance(s.rx.mirrorOf(theta), res.aoa_rad));
+        if (d < 10 * M_PI / 180) continue;  // the estimator's own peak
+        candidates_.push_back({theta, s.spec[Eigen::Index(i)] / pMax});
+    }
+}
+
+void BearingProcessor::track(const CObservationWiFiCSI& csi)
+{
+    BearingResult& r = lastResult_;
+    findCandidates(r);
+    const auto pose = odometry_.empty() ? std::nullopt : odometryAt(csi.timestamp);
+    const AntennaArray& rx = scan_->rx;
+    lastDecision_ = tracker_.update(
+        csi.transmitter, mrpt::Clock::toDouble(csi.timestamp), pose, rx, candidates_, r.aoaStd_rad);
+    const BearingTracker::Decision& d = lastDecision_;
+    if (d.chosen != 0)
+    {
+        // The track's candidate, stored as the estimators store a bearing (front half-plane
+        // first, then its mirror).
+        const bool linear = rx.size() >= 2 && rx.isLinear();
+        double theta = wrapAngle(candidates_[d.chosen].theta_rad);
+        if (linear && angleDistance(theta, rx.broadside()) > M_PI / 2) theta = rx.mirrorOf(theta);
+        r.aoa_rad = theta;
+        r.aoaMirror_rad = linear ? rx.mirrorOf(theta) : theta;
+    }
+    // A bearing the confident track contradicts: σ reaches the track.
+    if (d.confident && d.miss)
+        r.aoaStd_rad = std::min(std::max(r.aoaStd_rad, 0.5 * d.disagreement_rad), M_PI / 2);
 }
 
 void BearingProcessor::setTransmitterArray(const MacAddress& mac, AntennaArray array)
@@ -105,6 +192,8 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     ctx.rxArray = &pre_.rxArray();
     ctx.txArrayOf = [this](const MacAddress& m) { return txArrayOf(m); };
     if (!est_->estimate(frames_, ctx, lastResult_) || !lastResult_.valid) return nullptr;
+    lastDecision_ = BearingTracker::Decision();
+    if (tracking_) track(csi);
 
     auto b = CObservationWiFiBearing::Create();
     const BearingResult& res = lastResult_;

@@ -6,6 +6,7 @@
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+#include <mrpt_wifi/obs/bearing/BearingTracker.h>
 
 #include <deque>
 #include <map>
@@ -36,10 +37,27 @@ public:
          *  every real AP's chains have their own unknown phases, so such an AoD is not a
          *  bearing. false: dropped (hasAod = false); true: reported as the estimator found it. */
         bool uncalibratedAod = false;
+        /** Per-transmitter tracking over time (BearingTracker): where a window supports
+         *  several directions (the other endfire, the mirror, a second path), the one the
+         *  transmitter's track predicts from the earlier windows and the odometry is reported,
+         *  and a bearing the confident track contradicts gets a σ that reaches the track.
+         *  nullopt: on for the `default` estimator, off for the others. */
+        std::optional<bool> tracking;
+        BearingTracker::Options tracker;
     };
 
     BearingProcessor(
         CsiPreprocessor preprocessor, std::unique_ptr<BearingEstimator> estimator, Options options);
+    ~BearingProcessor();
+    BearingProcessor(BearingProcessor&&) noexcept;
+    BearingProcessor& operator=(BearingProcessor&&) noexcept;
+
+    bool tracking() const { return tracking_; }
+    /** What the tracks said about the last bearing (valid when tracking() and process()
+     *  returned a bearing). */
+    const BearingTracker::Decision& lastTrackDecision() const { return lastDecision_; }
+    /** The directions the last window supported (the estimator's first), given to the tracker. */
+    const std::vector<BearingCandidate>& lastCandidates() const { return candidates_; }
 
     /** Transmitter arrays for AoD: one per MAC, and/or a default for all. */
     void setTransmitterArray(const MacAddress& mac, AntennaArray array);
@@ -72,6 +90,11 @@ private:
     const AntennaArray* txArrayOf(const MacAddress& mac) const;
     /** Drops the older frames of frames_ taken too far (odometry) from the newest. */
     void limitWindowByMotion();
+    /** The estimator's bearing plus the other directions the window's CSI supports (local
+     *  maxima of its wideband Bartlett spectrum, matched to the result's delay if it has one). */
+    void findCandidates(const BearingResult& res);
+    /** Runs the tracker on lastResult_ and applies its decision to it. */
+    void track(const CObservationWiFiCSI& csi);
 
     CsiPreprocessor pre_;
     std::unique_ptr<BearingEstimator> est_;
@@ -84,6 +107,12 @@ private:
     std::deque<std::pair<double, mrpt::math::TPose2D>> odometry_;  //!< (time [s], pose)
     const CleanCsi* lastFrame_ = nullptr;
     BearingResult lastResult_;
+    bool tracking_ = false;
+    BearingTracker tracker_;
+    BearingTracker::Decision lastDecision_;
+    std::vector<BearingCandidate> candidates_;
+    struct CandidateScan;  // spectrum workspace (BearingMath, not installed)
+    std::unique_ptr<CandidateScan> scan_;
 };
 
 }  // namespace mrpt_wifi::bearing
