@@ -437,11 +437,13 @@ public:
             for (unsigned m = 0; m < f->nTx; ++m, ++c)
                 Eigen::Map<Eigen::MatrixXcf>(X_.col(c).data(), nRx, nSub) =
                     f->H.middleRows(Eigen::Index(m) * nRx, nRx);
-        // Thin SVD through the small Gram matrix (cols ≪ rows).
-        // Hermitian: one triangle is enough (half the flops of a full product).
-        gramF_.setZero(cols, cols);
-        gramF_.selfadjointView<Eigen::Lower>().rankUpdate(X_.adjoint());
-        gram_ = gramF_.cast<std::complex<double>>();
+        // Thin SVD through the small Gram matrix (cols ≪ rows). Hermitian: the lower triangle
+        // is enough. Column dot products: for this tall, thin shape they are 2.4× faster than
+        // Eigen's triangular product, whose packing of the 936-row operand dominates.
+        gram_.setZero(cols, cols);
+        for (Eigen::Index j = 0; j < cols; ++j)
+            for (Eigen::Index i = j; i < cols; ++i)
+                gram_(i, j) = std::complex<double>(X_.col(i).dot(X_.col(j)));
         es_.compute(gram_, Eigen::ComputeEigenvectors);  // reads the lower triangle only
         const Eigen::Index keep = std::min<Eigen::Index>(opts_.components, cols);
         pc_.H.resize(keep * nRx, nSub);
@@ -468,7 +470,7 @@ public:
     }
 
 private:
-    Eigen::MatrixXcf X_, gramF_;
+    Eigen::MatrixXcf X_;
     Eigen::VectorXcf u_;
     Eigen::MatrixXcd gram_;
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> es_;
