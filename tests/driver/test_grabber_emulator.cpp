@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "EmulatorProcess.h"
+#include "GrabberRun.h"
 #include "SshdFixture.h"
 
 using namespace mrpt_wifi;
@@ -22,82 +23,6 @@ namespace
 std::string scenario(const std::string& name)
 {
     return test::sourceDir() + "/share/scenarios/" + name + ".yaml";
-}
-
-/** A share/rawlog-grabber config with some keys set to test values (others untouched). */
-std::string deriveIni(
-    const std::string& shareIni, const std::map<std::string, std::string>& keys,
-    const std::string& out)
-{
-    std::istringstream in(test::readFile(test::sourceDir() + "/share/rawlog-grabber/" + shareIni));
-    std::ostringstream o;
-    auto pending = keys;
-    std::string section;
-    for (std::string line; std::getline(in, line);)
-    {
-        if (!line.empty() && line[0] == '[') section = line;
-        const auto eq = line.find('=');
-        if (eq != std::string::npos && line[0] != ';' && line[0] != '#')
-        {
-            std::string key = line.substr(0, eq);
-            key.erase(key.find_last_not_of(" \t") + 1);
-            if (auto it = pending.find(key); it != pending.end() && section != "[ODOMETRY]")
-            {
-                o << key << " = " << it->second << "\n";
-                pending.erase(it);
-                continue;
-            }
-        }
-        o << line << "\n";
-    }
-    for (const auto& [k, v] : pending) o << k << " = " << v << "\n";  // the CSI section is last
-    std::ofstream(out) << o.str();
-    return out;
-}
-
-struct Recording
-{
-    std::vector<CObservationWiFiCSI::Ptr> frames;
-    std::vector<CObservationWiFiScan::Ptr> scans;
-    std::string log;
-    int exitCode = -1;
-};
-
-/** Runs rawlog-grabber for `seconds`, then stops it the way a user does (a key on stdin). */
-Recording runGrabber(const test::TempDir& tmp, const std::string& ini, double seconds)
-{
-    Recording r;
-    char cmd[1024];
-    std::snprintf(
-        cmd, sizeof(cmd),
-        "cd %s && (sleep %.1f; echo) | timeout 120 rawlog-grabber -p %s/libmrpt_wifi_sensor.so %s",
-        tmp.path().c_str(), seconds, test::libDir().c_str(), ini.c_str());
-    const auto res = test::run(cmd);
-    r.exitCode = res.exitCode;
-    r.log = res.output;
-    for (const auto& entry : std::filesystem::directory_iterator(tmp.path()))
-    {
-        if (entry.path().extension() != ".rawlog") continue;
-        mrpt::io::CFileGZInputStream f(entry.path().string());
-        auto arch = mrpt::serialization::archiveFrom(f);
-        for (;;)
-        {
-            mrpt::serialization::CSerializable::Ptr obj;
-            try
-            {
-                arch >> obj;
-            }
-            catch (const std::exception&)
-            {
-                break;  // end of file
-            }
-            if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
-                r.frames.push_back(csi);
-            if (auto scan = std::dynamic_pointer_cast<CObservationWiFiScan>(obj))
-                r.scans.push_back(scan);
-        }
-    }
-    return r;
 }
 
 std::map<std::string, std::string> sshKeys(const test::SshdFixture& sshd)
@@ -127,8 +52,8 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
     keys["udp_port"] = std::to_string(port);
     keys["channel"] = "155/80";
     keys["rawlog_prefix"] = "rec";
-    const auto ini = deriveIni("csi_receiver.ini", keys, tmp.file("grab.ini"));
-    const auto rec = runGrabber(tmp, ini, 6.0);
+    const auto ini = test::deriveGrabberIni("csi_receiver.ini", keys, tmp.file("grab.ini"));
+    const auto rec = test::runGrabber(tmp, ini, 6.0);
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
     EXPECT_NE(rec.log.find("router configured: CSI on 155/80"), std::string::npos) << rec.log;
 
@@ -164,7 +89,7 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
         port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     // No router control here: a receiver that only listens (preconfigured router).
-    const auto ini = deriveIni(
+    const auto ini = test::deriveGrabberIni(
         "csi_receiver.ini",
         {{"router_control", "false"},
          {"udp_port", std::to_string(port)},
@@ -173,7 +98,7 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
          {"status_period", "1"},
          {"rawlog_prefix", "lossy"}},
         tmp.file("grab.ini"));
-    const auto rec = runGrabber(tmp, ini, 4.0);
+    const auto rec = test::runGrabber(tmp, ini, 4.0);
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
     ASSERT_GT(rec.frames.size(), 800u);
     size_t incomplete = 0;
@@ -202,7 +127,8 @@ TEST(GrabberEmulator, WrongKeyOrUnreachableRouterIsAClearErrorNotAHang)
     keys["login_identity_file"] = sshd.otherKey();  // not authorised on the router
     keys["rawlog_prefix"] = "wrongkey";
     const auto t0 = std::chrono::steady_clock::now();
-    auto rec = runGrabber(tmp, deriveIni("csi_receiver.ini", keys, tmp.file("a.ini")), 3.0);
+    auto rec = test::runGrabber(
+        tmp, test::deriveGrabberIni("csi_receiver.ini", keys, tmp.file("a.ini")), 3.0);
     EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(30));
     EXPECT_NE(rec.log.find("authentication failed"), std::string::npos) << rec.log;
 
@@ -210,7 +136,8 @@ TEST(GrabberEmulator, WrongKeyOrUnreachableRouterIsAClearErrorNotAHang)
     keys["login_port"] = std::to_string(test::freeLoopbackPort());  // nobody there
     keys["login_connect_timeout"] = "2";
     keys["rawlog_prefix"] = "unreachable";
-    rec = runGrabber(tmp, deriveIni("csi_receiver.ini", keys, tmp.file("b.ini")), 3.0);
+    rec = test::runGrabber(
+        tmp, test::deriveGrabberIni("csi_receiver.ini", keys, tmp.file("b.ini")), 3.0);
     EXPECT_NE(rec.log.find("router unreachable"), std::string::npos) << rec.log;
 }
 
@@ -233,8 +160,8 @@ TEST(GrabberEmulator, AutomaticModeSwitchesOnceWhenTheRobotRoams)
     keys["scan_wait"] = "0.3";
     keys["auto_min_dwell_s"] = "2";
     keys["rawlog_prefix"] = "auto";
-    const auto rec =
-        runGrabber(tmp, deriveIni("csi_auto_channel.ini", keys, tmp.file("auto.ini")), 14.0);
+    const auto rec = test::runGrabber(
+        tmp, test::deriveGrabberIni("csi_auto_channel.ini", keys, tmp.file("auto.ini")), 14.0);
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
     // Locks onto the west AP first (the robot starts there), then switches exactly once.
     const std::regex switchRe("channel switch to ([0-9]+/[0-9]+): (.*)");
@@ -282,7 +209,7 @@ TEST(GrabberEmulator, CsiRouterSwitchMeasuresTheDowntime)
                                 "/share/rawlog-grabber/csi_receiver.ini";
     // csi_receiver.ini listens on 5500; point it at the emulator's port via a derived copy.
     test::TempDir tmp;
-    const auto ini = deriveIni(
+    const auto ini = test::deriveGrabberIni(
         "csi_receiver.ini", {{"udp_port", std::to_string(port)}, {"udp_bind_address", "127.0.0.1"}},
         tmp.file("r.ini"));
     r = test::run(base + "switch 36/80 --measure --measure-timeout 3 --config " + ini);
@@ -306,7 +233,7 @@ TEST(GrabberEmulator, PcapSourceReplaysACaptureAtItsRecordedPace)
     // source = pcap: the same data path fed from a capture (here the project's sample: 22
     // frames over ~50 ms), through Debian's rawlog-grabber.
     test::TempDir tmp;
-    const auto ini = deriveIni(
+    const auto ini = test::deriveGrabberIni(
         "csi_receiver.ini",
         {{"router_control", "false"},
          {"source", "pcap"},
@@ -314,7 +241,7 @@ TEST(GrabberEmulator, PcapSourceReplaysACaptureAtItsRecordedPace)
          {"router_address", "10.10.10.10"},
          {"rawlog_prefix", "replay"}},
         tmp.file("replay.ini"));
-    const auto rec = runGrabber(tmp, ini, 3.0);
+    const auto rec = test::runGrabber(tmp, ini, 3.0);
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
     EXPECT_NE(rec.log.find("replay of"), std::string::npos) << rec.log;
     // rawlog-grabber 2.5.8 keeps the last queued observation unwritten at exit.

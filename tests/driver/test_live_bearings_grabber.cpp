@@ -12,6 +12,7 @@
 #include <map>
 #include <sstream>
 
+#include "GrabberRun.h"
 #include "TestSupport.h"
 
 using namespace mrpt_wifi;
@@ -36,34 +37,6 @@ std::vector<mrpt::serialization::CSerializable::Ptr> readRawlog(const std::strin
         }
         out.push_back(obj);
     }
-    return out;
-}
-
-/** csi_live_bearings.ini with some keys replaced (each in the line where the example has it). */
-std::string deriveIni(const std::map<std::string, std::string>& keys, const std::string& out)
-{
-    std::istringstream in(
-        test::readFile(test::sourceDir() + "/share/rawlog-grabber/csi_live_bearings.ini"));
-    std::ostringstream o;
-    auto pending = keys;
-    for (std::string line; std::getline(in, line);)
-    {
-        const auto eq = line.find('=');
-        if (eq != std::string::npos && line[0] != ';' && line[0] != '#')
-        {
-            std::string key = line.substr(0, eq);
-            key.erase(key.find_last_not_of(" \t") + 1);
-            if (auto it = pending.find(key); it != pending.end())
-            {
-                o << key << " = " << it->second << "\n";
-                pending.erase(it);
-                continue;
-            }
-        }
-        o << line << "\n";
-    }
-    for (const auto& [k, v] : pending) o << k << " = " << v << "\n";  // the CSI section is last
-    std::ofstream(out) << o.str();
     return out;
 }
 
@@ -114,7 +87,8 @@ TEST(LiveBearingsGrabber, ReplayGivesTheBearingsCsiBearingsComputesOffline)
     test::TempDir tmp;
     const std::string pcap = test::sourceDir() + "/share/samples/sample_4x4_80mhz.pcap";
     const std::string algo = "aoa_only";
-    const auto ini = deriveIni(
+    const auto ini = test::deriveGrabberIni(
+        "csi_live_bearings.ini",
         {{"router_control", "false"},
          {"source", "pcap"},
          {"pcap_file", pcap},

@@ -4,6 +4,7 @@
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/CObservationWiFiScan.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -17,8 +18,9 @@
 
 namespace mrpt_wifi::test
 {
-/** A share/rawlog-grabber config with some keys set to test values (the others untouched;
- *  keys the file lacks are appended to its last section). Returns `out`. */
+/** A share/rawlog-grabber config with some keys set to test values, each in the line where the
+ *  example has it (the others untouched; keys the file lacks are appended to its last section,
+ *  the CSI sensor's). Returns `out`. */
 inline std::string deriveGrabberIni(
     const std::string& shareIni, const std::map<std::string, std::string>& keys,
     const std::string& out)
@@ -50,20 +52,22 @@ inline std::string deriveGrabberIni(
 struct GrabberRecording
 {
     std::vector<CObservationWiFiCSI::Ptr> frames;
+    std::vector<CObservationWiFiScan::Ptr> scans;
     std::string log;
     int exitCode = -1;
 };
 
 /** Runs rawlog-grabber in `dir` for `seconds`, stops it as a user does (a key on stdin), and
  *  reads back the CSI frames of the rawlog it wrote. */
-inline GrabberRecording runGrabber(const TempDir& dir, const std::string& ini, double seconds)
+inline GrabberRecording runGrabber(
+    const TempDir& dir, const std::string& ini, double seconds, int timeoutSeconds = 120)
 {
     GrabberRecording r;
     char cmd[1024];
     std::snprintf(
         cmd, sizeof(cmd),
-        "cd %s && (sleep %.1f; echo) | timeout 60 rawlog-grabber -p %s/libmrpt_wifi_sensor.so %s",
-        dir.path().c_str(), seconds, libDir().c_str(), ini.c_str());
+        "cd %s && (sleep %.1f; echo) | timeout %d rawlog-grabber -p %s/libmrpt_wifi_sensor.so %s",
+        dir.path().c_str(), seconds, timeoutSeconds, libDir().c_str(), ini.c_str());
     const auto res = run(cmd);
     r.exitCode = res.exitCode;
     r.log = res.output;
@@ -85,6 +89,8 @@ inline GrabberRecording runGrabber(const TempDir& dir, const std::string& ini, d
             }
             if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
                 r.frames.push_back(csi);
+            else if (auto scan = std::dynamic_pointer_cast<CObservationWiFiScan>(obj))
+                r.scans.push_back(scan);
         }
     }
     return r;
