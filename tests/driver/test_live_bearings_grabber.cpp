@@ -19,27 +19,6 @@ using namespace mrpt_wifi;
 
 namespace
 {
-std::vector<mrpt::serialization::CSerializable::Ptr> readRawlog(const std::string& path)
-{
-    std::vector<mrpt::serialization::CSerializable::Ptr> out;
-    mrpt::io::CFileGZInputStream f(path);
-    auto arch = mrpt::serialization::archiveFrom(f);
-    for (;;)
-    {
-        mrpt::serialization::CSerializable::Ptr obj;
-        try
-        {
-            arch >> obj;
-        }
-        catch (const std::exception&)
-        {
-            break;  // end of file
-        }
-        out.push_back(obj);
-    }
-    return out;
-}
-
 struct Bearing
 {
     std::string label;
@@ -123,8 +102,8 @@ TEST(LiveBearingsGrabber, ReplayGivesTheBearingsCsiBearingsComputesOffline)
         tmp.file("off_bearings.rawlog"));
     ASSERT_EQ(off.exitCode, 0) << off.output;
 
-    const auto live = framesWithBearings(readRawlog(liveRawlog));
-    const auto offline = framesWithBearings(readRawlog(tmp.file("off_bearings.rawlog")));
+    const auto live = framesWithBearings(test::readRawlog(liveRawlog));
+    const auto offline = framesWithBearings(test::readRawlog(tmp.file("off_bearings.rawlog")));
     ASSERT_EQ(offline.size(), 22u);
     // rawlog-grabber 2.5.8 keeps the last queued observation unwritten at exit.
     ASSERT_GE(live.size(), 21u) << grab.output;

@@ -49,6 +49,28 @@ inline std::string deriveGrabberIni(
     return out;
 }
 
+/** Every object of a (possibly gzipped) rawlog, in order; stops at its end. */
+inline std::vector<mrpt::serialization::CSerializable::Ptr> readRawlog(const std::string& path)
+{
+    std::vector<mrpt::serialization::CSerializable::Ptr> out;
+    mrpt::io::CFileGZInputStream f(path);
+    auto arch = mrpt::serialization::archiveFrom(f);
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            arch >> obj;
+        }
+        catch (const std::exception&)
+        {
+            break;  // end of file
+        }
+        out.push_back(obj);
+    }
+    return out;
+}
+
 struct GrabberRecording
 {
     std::vector<CObservationWiFiCSI::Ptr> frames;
@@ -74,19 +96,8 @@ inline GrabberRecording runGrabber(
     for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
     {
         if (entry.path().extension() != ".rawlog") continue;
-        mrpt::io::CFileGZInputStream f(entry.path().string());
-        auto arch = mrpt::serialization::archiveFrom(f);
-        for (;;)
+        for (const auto& obj : readRawlog(entry.path().string()))
         {
-            mrpt::serialization::CSerializable::Ptr obj;
-            try
-            {
-                arch >> obj;
-            }
-            catch (const std::exception&)
-            {
-                break;  // end of file
-            }
             if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
                 r.frames.push_back(csi);
             else if (auto scan = std::dynamic_pointer_cast<CObservationWiFiScan>(obj))
