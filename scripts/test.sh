@@ -3,7 +3,7 @@
 #   1. the GoogleTest suites and integration tests with Debian's MRPT apps (Release build);
 #   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer;
 #   3. the libFuzzer targets (clang): the Nexmon parser + frame assembler and one per CSI file
-#      decoder (nexmon, intel5300, esp32), FUZZ_SECONDS split between them.
+#      decoder (nexmon, intel5300, esp32, atheros), FUZZ_SECONDS split between them.
 # Ends with one line "summary: N passed, N failed". Exit code non-zero if anything failed.
 set -uo pipefail
 cd "$(dirname "$0")/.."
