@@ -10,6 +10,7 @@
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include "CalibTestSupport.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::calib;
@@ -248,7 +249,8 @@ TEST_F(TxChainCalibration, AodOnlyWhereCalibratedAndHonestSigma)
     EXPECT_GT(quantile(raw.errors_deg, 0.5), 5.0);
 
     // Calibrated on the first half (a folder, as wifi-calibrate writes it), AoD on the second.
-    const std::string dir = mrpt::system::getTempFileName() + "_txcal";
+    const test::TempDir tmp;  // removed with everything in it
+    const std::string dir = tmp.file("txcal");
     for (const auto& [mac, res] : truePoses_.transmitters)
         res.calibration.saveYamlFile(
             PhaseCalibration::transmitterPathFor(dir, mac, res.calibration.chanspec));
@@ -308,7 +310,8 @@ TEST(TxCalibrationFile, RoundTripAndOldFormat)
         CalibrationError);  // a receiver file has no transmitter
 
     // The folder layout: found for its MAC and channel only; a receiver lookup never takes it.
-    const std::string dir = mrpt::system::getTempFileName() + "_txfile";
+    const test::TempDir tmp;
+    const std::string dir = tmp.file("txfile");
     c.saveYamlFile(PhaseCalibration::transmitterPathFor(dir, c.transmitter, c.chanspec));
     const auto store = CalibrationStore::open(dir);
     ASSERT_NE(store.findTransmitter(c.transmitter, c.chanspec, 4), nullptr);
