@@ -12,6 +12,7 @@
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/random/RandomGenerators.h>
 #include <mrpt/system/CTicTac.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
@@ -50,6 +51,20 @@ public:
         motion_ = motion;
         cv_.emplace(motion);
     }
+    /** Reproducible runs. MRPT's app seeds the global generator from the clock just before its
+     *  runs; its log line announcing each run (before the particles are drawn) is where the
+     *  seed goes in. Must be called before run(). */
+    void seedEachRun(unsigned seed)
+    {
+        setVerbosityLevelForCallbacks(mrpt::system::LVL_INFO);
+        logRegisterCallback(
+            [this, seed](std::string_view msg, auto, auto, auto)
+            {
+                if (msg.find("RUNNING FOR") == std::string_view::npos) return;
+                mrpt::random::getRandomGenerator().randomize(seed);
+                seeded_ = true;
+            });
+    }
 
 protected:
     bool impl_get_next_observations(
@@ -64,6 +79,12 @@ protected:
             stamp = observation->timestamp;
         else if (ok && observations && !observations->empty())
             stamp = (*observations->begin())->timestamp;
+        if (stamp != INVALID_TIMESTAMP && !seeded_ && !warnedUnseeded_)
+        {
+            std::cerr << "warning: --seed: this MRPT's pf-localization announced no run to seed "
+                         "before filtering: this run is not reproducible\n";
+            warnedUnseeded_ = true;
+        }
         if (stamp != INVALID_TIMESTAMP && t1_ > t0_)
         {
             ++steps;
@@ -99,6 +120,7 @@ private:
     }
 
     cli::Progress progress_;
+    bool seeded_ = false, warnedUnseeded_ = false;
     double t0_ = 0, t1_ = 0;
     UnknownMotion motion_;
     std::optional<ConstantVelocityPrediction> cv_;
@@ -142,9 +164,11 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argMaxSpeed(
                 "", "max-speed",
                 "Without odometry: the robot's top speed [m/s]. Between filter steps dt apart "
-                "the pose takes a zero-mean Gaussian step of sigma = max_speed*sqrt(dt*tau) per "
-                "axis (tau = 1 s), so over any second the walk spreads as far as the robot can "
-                "drive. Overrides [UnknownMotion] max_speed_mps of the .ini (default 0.5)",
+                "the pose takes a Gaussian step of sigma = max_speed*sqrt(dt*tau) per axis "
+                "around the constant-velocity prediction (tau: correlation_time_s, or "
+                "wide_correlation_time_s for a wide_fraction of the steps), so over tau the walk "
+                "spreads as far as the robot can drive. Overrides [UnknownMotion] max_speed_mps "
+                "of the .ini (default 0.5)",
                 false, 0.5, "M/S", cmd);
             TCLAP::ValueArg<std::string> argPose(
                 "", "sensor-pose",
@@ -171,6 +195,11 @@ int main(int argc, char** argv)
                 "as if the robot had been kidnapped to wherever it is at that time. Times to "
                 "converge and errors.csv count from this kidnapping moment",
                 false, 0.0, "S", cmd);
+            TCLAP::ValueArg<unsigned> argSeed(
+                "", "seed",
+                "Seed of the particle filter's random numbers: the same input, .ini and seed "
+                "give the same run",
+                false, 1, "N", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
 
@@ -317,6 +346,7 @@ int main(int argc, char** argv)
             app.params.write(sect, "logOutput_dir", outDir + "/mrpt");
             if (!txFile.empty()) app.params.write(mapSect, "transmitters_file", txFile);
             const auto counts = app.params.read_string(sect, "particles_count", "", true);
+            app.seedEachRun(argSeed.getValue());
             mrpt::system::CTicTac timer;
             app.run();
             const double runTime = timer.Tac();

@@ -116,6 +116,12 @@ size_t writePfRawlogUnknownMotion(
     const UnknownMotion& motion)
 {
     motion.validate();
+    // Readers of this rawlog (Debian's pf-localization) have no constant-velocity prediction:
+    // the zero-mean walk must keep up with the robot on its own, so it takes the wide horizon
+    // for every step (one Gaussian; a mixture would store 1000 samples per step).
+    UnknownMotion walk = motion;
+    if (walk.wideFraction > 0) walk.correlationTime_s = walk.wideCorrelationTime_s;
+    walk.wideFraction = 0;
     mrpt::io::CFileGZOutputStream f;
     if (!f.open(path, 0)) throw std::runtime_error(path + ": cannot write rawlog");
     auto arch = mrpt::serialization::archiveFrom(f);
@@ -130,7 +136,7 @@ size_t writePfRawlogUnknownMotion(
         const double t = bearings[order[i]].t;
         const double dt = frames ? t - bearings[order[i - 1]].t : 0.0;
         mrpt::obs::CActionCollection acts;
-        auto a = motion.makeAction(dt);
+        auto a = walk.makeAction(dt);
         a->timestamp = mrpt::Clock::fromDouble(t);
         acts.insert(*a);
         mrpt::obs::CSensoryFrame sf;

@@ -2,6 +2,8 @@
 #include <mrpt/core/bits_math.h>
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
+#include <mrpt/poses/CPosePDFParticles.h>
+#include <mrpt/random/RandomGenerators.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
 
 #include <algorithm>
@@ -38,6 +40,27 @@ mrpt::obs::CActionRobotMovement2D::Ptr UnknownMotion::makeAction(
     mm.gaussianModel.minStdPHI = float(stdPhi(dt_s));
     auto a = mrpt::obs::CActionRobotMovement2D::Create();
     a->computeFromOdometry(increment, mm);
+    if (wideFraction > 0)
+    {
+        // The mixture as samples: MRPT's filter draws each particle's step from them.
+        UnknownMotion wide = *this;
+        wide.correlationTime_s = wideCorrelationTime_s;
+        const size_t nSamples = 1000;
+        auto pdf = mrpt::poses::CPosePDFParticles::Create(nSamples);
+        auto& rng = mrpt::random::getRandomGenerator();
+        for (size_t i = 0; i < nSamples; ++i)
+        {
+            const bool isWide = double(i) < wideFraction * double(nSamples);
+            const double sxy = isWide ? wide.stdXY(dt_s) : stdXY(dt_s);
+            const double sphi = isWide ? wide.stdPhi(dt_s) : stdPhi(dt_s);
+            auto& d = pdf->m_particles[i].d;
+            d.x = increment.x() + sxy * rng.drawGaussian1D_normalized();
+            d.y = increment.y() + sxy * rng.drawGaussian1D_normalized();
+            d.phi = mrpt::math::wrapToPi(increment.phi() + sphi * rng.drawGaussian1D_normalized());
+            pdf->m_particles[i].log_w = -std::log(double(nSamples));  // drawn by linear weight
+        }
+        a->poseChange = pdf;
+    }
     return a;
 }
 
@@ -53,6 +76,8 @@ void UnknownMotion::loadFromConfigFile(
     constantVelocity = cfg.read_bool(s, "constant_velocity", constantVelocity);
     velocityWindow_s = cfg.read_double(s, "velocity_window_s", velocityWindow_s);
     forwardOnly = cfg.read_bool(s, "forward_only", forwardOnly);
+    wideFraction = cfg.read_double(s, "wide_fraction", wideFraction);
+    wideCorrelationTime_s = cfg.read_double(s, "wide_correlation_time_s", wideCorrelationTime_s);
     validate();
 }
 
@@ -72,6 +97,11 @@ void UnknownMotion::validate() const
     check(minStdXY_m, "min_std_xy");
     check(minStdPhi_deg, "min_std_phi_deg");
     check(velocityWindow_s, "velocity_window_s");
+    check(wideCorrelationTime_s, "wide_correlation_time_s");
+    if (!(wideFraction >= 0 && wideFraction <= 1))
+        throw std::invalid_argument(
+            "unknown-motion model: wide_fraction must be in [0, 1] (got " +
+            std::to_string(wideFraction) + ")");
 }
 
 std::string UnknownMotion::asString() const
@@ -83,6 +113,9 @@ std::string UnknownMotion::asString() const
     if (constantVelocity)
         o << ", velocity over " << velocityWindow_s << " s"
           << (forwardOnly ? ", forward only" : "");
+    if (wideFraction > 0)
+        o << ", " << 100 * wideFraction << " % of steps with tau " << wideCorrelationTime_s
+          << " s";
     return o.str();
 }
 

@@ -120,9 +120,10 @@ double medianError(const std::string& errorsCsv, double from_s)
 TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
 {
     // Issue 12.3: a moving robot (0.5 m/s), 4 APs, no odometry at all: the unknown-motion model
-    // (constant velocity from the filter's own estimates + a random walk bounded by --max-speed)
-    // must track it. The issue's target is 1.5x the error with odometry; it is not reached
-    // (kidnapped.yaml, seeds 74-77: 2x; this world with sharp corners and 5 bearings/AP/s: 3-3.6x).
+    // (constant velocity from the filter's own estimates + a heavy-tailed random walk bounded by
+    // --max-speed, the shipped .ini's values) must track it. The issue's target is 1.5x the
+    // error with odometry: kidnapped.yaml gives 1.33-1.52x at 30 bearings/AP/s, 1.75-2.04x at
+    // 10/s; this world with sharp corners and 5 bearings/AP/s is the hard case (2.0-2.6x).
     // Bearing noise as csi-bearings gives on the simulator (~8 deg, 10 % outliers).
     const auto& f = fixture();
     WorldOptions o;
@@ -149,10 +150,18 @@ TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
     const double eNo = medianError(f.dir + "/pf-noodo/errors.csv", 15);
     std::cout << "median error after 15 s: with odometry " << eOdo << " m, without " << eNo
               << " m\n";
-    // Measured on seeds 5-7: 0.27-0.31 m without odometry vs 0.07-0.09 m with it (3.1-3.6x;
-    // the zero-mean walk gave 0.29-0.33 m), far below the 2.9 m of "standing still" odometry.
-    EXPECT_LT(eNo, 0.45) << noOdo.out;
-    EXPECT_LT(eNo, 4.5 * eOdo) << noOdo.out;
+    // Measured on seeds 5-7: 0.19-0.23 m without odometry vs 0.07-0.11 m with it. One Gaussian
+    // walk gave 0.27-0.33 m (correlation_time_s = 0.2) and 0.95-1.23 m (0.05: it loses the
+    // robot in the corners); "standing still" odometry 2.9 m.
+    EXPECT_LT(eNo, 0.3) << noOdo.out;
+    EXPECT_LT(eNo, 3.5 * eOdo) << noOdo.out;
+    // --seed (default 1): the same input and seed give the same run, estimate for estimate.
+    const auto again = run(common + " --max-speed 0.6 -o " + f.dir + "/pf-noodo-again");
+    ASSERT_EQ(again.rc, 0) << again.out;
+    EXPECT_EQ(
+        mrpt_wifi::test::readFile(f.dir + "/pf-noodo/estimate_tum.txt"),
+        mrpt_wifi::test::readFile(f.dir + "/pf-noodo-again/estimate_tum.txt"));
+    EXPECT_EQ(again.out.find("not reproducible"), std::string::npos) << again.out;
     // Without odometry and without a sane speed the model refuses to run.
     const auto bad = run(common + " --max-speed 0 -o " + f.dir + "/pf-bad");
     EXPECT_EQ(bad.rc, 1);

@@ -6,6 +6,8 @@
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
+#include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
@@ -260,4 +262,39 @@ TEST(ConstantVelocityPrediction, ForwardOnlyMovesAlongTheHeading)
     mrpt_wifi::localization::UnknownMotion r;
     r.loadFromConfigFile(ini, "UnknownMotion");
     EXPECT_TRUE(r.forwardOnly);
+}
+
+TEST(UnknownMotion, WideFractionMakesTheWalkHeavyTailed)
+{
+    // Issue 12.3: a tight walk for straight drives, with a few wide steps for the turns the
+    // constant-velocity prediction misses: the step is drawn from a mixture.
+    mrpt_wifi::localization::UnknownMotion m;
+    m.maxSpeed_mps = 0.6, m.correlationTime_s = 0.05;
+    m.wideFraction = 0.1, m.wideCorrelationTime_s = 1.0;
+    const double dt = 0.1, narrow = m.stdXY(dt);
+    const auto a = m.makeAction(dt, mrpt::poses::CPose2D(0.06, 0, 0));
+    const auto* pdf = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(a->poseChange.get());
+    ASSERT_NE(pdf, nullptr);
+    // Drawn the way MRPT's filter draws a particle's step.
+    size_t far = 0;
+    const size_t n = 20000;
+    double sum = 0;
+    for (size_t i = 0; i < n; ++i)
+    {
+        mrpt::poses::CPose2D d;
+        pdf->drawSingleSample(d);
+        sum += d.x();
+        if (std::abs(d.x() - 0.06) > 4 * narrow) ++far;
+    }
+    EXPECT_NEAR(sum / n, 0.06, 3 * m.stdXY(dt) / std::sqrt(double(n)) + 0.01);
+    // |x| > 4 sigma of the narrow part: ~never from it, ~46 % of the wide steps (sigma 4.5x).
+    EXPECT_GT(double(far) / n, 0.03);
+    EXPECT_LT(double(far) / n, 0.07);
+    // Without the wide part the action stays MRPT's Gaussian.
+    m.wideFraction = 0;
+    EXPECT_NE(
+        dynamic_cast<const mrpt::poses::CPosePDFGaussian*>(m.makeAction(dt)->poseChange.get()),
+        nullptr);
+    m.wideFraction = 1.5;
+    EXPECT_THROW(m.validate(), std::invalid_argument);
 }

@@ -35,7 +35,8 @@ size_t writePfRawlog(
 
 /** Writes an action/sensory-frame rawlog for pf-localization without odometry: one sensory frame
  *  per bearing time (bearings with the same timestamp share it), each after the action `motion`
- *  gives for the time since the previous frame. Returns the number of sensory frames. */
+ *  gives for the time since the previous frame (zero mean; with a heavy-tailed `motion`, the
+ *  Gaussian of its wide part). Returns the number of sensory frames. */
 size_t writePfRawlogUnknownMotion(
     const std::string& path, const std::vector<BearingRecord>& bearings,
     const UnknownMotion& motion);

@@ -27,6 +27,9 @@ namespace mrpt_wifi::localization
  *  are capped there (the filter restarts its search rather than spreading over the whole map
  *  after a gap), and σ never falls below the floors (a particle cloud needs some jitter).
  *
+ *  The member defaults are the plain model (one Gaussian, no forward-only prediction); the
+ *  shipped share/localization/pf-localization-wifi.ini sets the measured, recommended values.
+ *
  *  Used by wifi-pf-localization (no --odometry-tum) and by any program that feeds MRPT's particle
  *  filters without odometry: makeAction() gives the CActionRobotMovement2D to pass as the
  *  filter's action. */
@@ -46,19 +49,28 @@ struct UnknownMotion
      *  is the forward speed only, each particle moving along its own heading (no sideways
      *  component from the noise of the estimates). */
     bool forwardOnly = false;
+    /** Heavy-tailed walk: this fraction of the filter's particles takes the walk of
+     *  `wideCorrelationTime_s` instead of τ, so a tight τ tracks straight drives closely while
+     *  the few wide steps catch the turns the constant-velocity prediction misses (the bearings
+     *  then pick them). 0: a single Gaussian. */
+    double wideFraction = 0.0;
+    double wideCorrelationTime_s = 1.0;  //!< τ of the wide part
 
     /** σ of the position change per axis [m] and of the heading change [rad] over `dt_s`. */
     double stdXY(double dt_s) const;
     double stdPhi(double dt_s) const;
 
     /** The filter action for a step of `dt_s` seconds: mean `increment` (robot frame; zero for
-     *  the pure random walk), the σ above (mmGaussian). */
+     *  the pure random walk), the σ above (mmGaussian). With `wideFraction > 0` its poseChange
+     *  is the mixture as 1000 equally weighted samples (CPosePDFParticles, which MRPT's filter
+     *  draws each particle's step from); they come from MRPT's global random generator. */
     mrpt::obs::CActionRobotMovement2D::Ptr makeAction(
         double dt_s, const mrpt::poses::CPose2D& increment = {}) const;
 
     /** Reads `max_speed_mps`, `max_turn_rate_dps`, `correlation_time_s`, `max_step_s`,
-     *  `min_std_xy`, `min_std_phi_deg`, `constant_velocity` (bool), `velocity_window_s`
-     *  from `section` (missing keys keep their value).
+     *  `min_std_xy`, `min_std_phi_deg`, `constant_velocity` (bool), `velocity_window_s`,
+     *  `forward_only` (bool), `wide_fraction`, `wide_correlation_time_s` from `section`
+     *  (missing keys keep their value).
      *  Throws std::invalid_argument on non-positive speeds or times. */
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
     /** Throws std::invalid_argument naming the bad field. */
