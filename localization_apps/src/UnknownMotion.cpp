@@ -114,8 +114,7 @@ std::string UnknownMotion::asString() const
         o << ", velocity over " << velocityWindow_s << " s"
           << (forwardOnly ? ", forward only" : "");
     if (wideFraction > 0)
-        o << ", " << 100 * wideFraction << " % of steps with tau " << wideCorrelationTime_s
-          << " s";
+        o << ", " << 100 * wideFraction << " % of steps with tau " << wideCorrelationTime_s << " s";
     return o.str();
 }
 

@@ -185,13 +185,13 @@ TEST(LocalizationAppsPf, WithoutOdometryWithinOneAndAHalfTimesTheOdometryError)
             "/k.rawlog -d 40 -s 81 -t " + t)
             .rc,
         0);
-    const auto synth = run(
-        kBin + "/wifi-bearings-synth " + t + "/frames.csv " + t + "/transmitters.yaml " +
-        dir + "/k.csv --rx-array " + share + "/arrays/rt-ac86u.yaml -s 81 --rate 30");
+    const auto synth =
+        run(kBin + "/wifi-bearings-synth " + t + "/frames.csv " + t + "/transmitters.yaml " + dir +
+            "/k.csv --rx-array " + share + "/arrays/rt-ac86u.yaml -s 81 --rate 30");
     ASSERT_EQ(synth.rc, 0) << synth.out;
     const std::string common = kBin + "/wifi-pf-localization " + kIni +
-                               " -q --no-plots -n 2000 -m " + t + "/transmitters.yaml -b " +
-                               dir + "/k.csv --sensor-pose 0.1 0 0.4 0 0 0 -g " + t +
+                               " -q --no-plots -n 2000 -m " + t + "/transmitters.yaml -b " + dir +
+                               "/k.csv --sensor-pose 0.1 0 0.4 0 0 0 -g " + t +
                                "/trajectory_tum.txt --max-speed 0.6";
     const auto withOdo =
         run(common + " --odometry-tum " + t + "/odometry_tum.txt -o " + dir + "/odo");
@@ -200,8 +200,8 @@ TEST(LocalizationAppsPf, WithoutOdometryWithinOneAndAHalfTimesTheOdometryError)
     ASSERT_EQ(noOdo.rc, 0) << noOdo.out;
     const double eOdo = medianError(dir + "/odo/errors.csv", 5);
     const double eNo = medianError(dir + "/no-odo/errors.csv", 5);
-    std::cout << "median error after 5 s: with odometry " << eOdo << " m, without " << eNo
-              << " m (" << eNo / eOdo << "x)\n";
+    std::cout << "median error after 5 s: with odometry " << eOdo << " m, without " << eNo << " m ("
+              << eNo / eOdo << "x)\n";
     EXPECT_LE(eNo, 1.5 * eOdo) << noOdo.out;
     EXPECT_LT(eOdo, 0.1) << withOdo.out;
 }

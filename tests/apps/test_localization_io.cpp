@@ -2,12 +2,13 @@
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/poses/CPose2D.h>
+#include <mrpt/poses/CPosePDFGaussian.h>
+#include <mrpt/poses/CPosePDFParticles.h>
+#include <mrpt/random/RandomGenerators.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
-#include <mrpt/poses/CPosePDFGaussian.h>
-#include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
@@ -272,6 +273,7 @@ TEST(UnknownMotion, WideFractionMakesTheWalkHeavyTailed)
     m.maxSpeed_mps = 0.6, m.correlationTime_s = 0.05;
     m.wideFraction = 0.1, m.wideCorrelationTime_s = 1.0;
     const double dt = 0.1, narrow = m.stdXY(dt);
+    mrpt::random::getRandomGenerator().randomize(7);
     const auto a = m.makeAction(dt, mrpt::poses::CPose2D(0.06, 0, 0));
     const auto* pdf = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(a->poseChange.get());
     ASSERT_NE(pdf, nullptr);
@@ -287,9 +289,10 @@ TEST(UnknownMotion, WideFractionMakesTheWalkHeavyTailed)
         if (std::abs(d.x() - 0.06) > 4 * narrow) ++far;
     }
     EXPECT_NEAR(sum / n, 0.06, 3 * m.stdXY(dt) / std::sqrt(double(n)) + 0.01);
-    // |x| > 4 sigma of the narrow part: ~never from it, ~46 % of the wide steps (sigma 4.5x).
-    EXPECT_GT(double(far) / n, 0.03);
-    EXPECT_LT(double(far) / n, 0.07);
+    // |x| > 4 sigma of the narrow part: ~never from it, ~37 % of the wide steps (sigma 4.5x),
+    // so ~3.7 % of all (100 wide samples: +-0.5 % at 1 sigma).
+    EXPECT_GT(double(far) / n, 0.02);
+    EXPECT_LT(double(far) / n, 0.06);
     // Without the wide part the action stays MRPT's Gaussian.
     m.wideFraction = 0;
     EXPECT_NE(
