@@ -2,6 +2,7 @@
 #include <ceres/ceres.h>
 #include <mrpt_wifi/calib/CalibrationCheck.h>
 #include <mrpt_wifi/calib/PhaseCalibrator.h>
+#include <mrpt_wifi/obs/Subcarriers.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -45,7 +46,31 @@ RejectReason FramePreparer::common(const CObservationWiFiCSI& obs, CalibrationFr
     out.layout = clean_.layout;
     out.H = clean_.H;
     out.hasGeometry = false;
+    out.chainDelay_s = clean_.chainDelay_s;
+    out.chainState = clean_.chainState;
     return r;
+}
+
+bool removeChainStates(const PhaseCalibration& c, CalibrationFrame& f)
+{
+    if (c.chainStates.empty()) return true;
+    if (f.chainDelay_s.size() < f.nRx || !f.layout) return false;
+    bool all = true;
+    for (unsigned i = 1; i < f.nRx; ++i)
+    {
+        const ChainStateCalibration* st = c.matchChainState(i, f.chainDelay_s[i]);
+        if (!st)
+        {
+            all = false;
+            continue;
+        }
+        const double w = 2 * M_PI * kSubcarrierSpacingHz * st->deltaDelay_s;
+        for (unsigned m = 0; m < f.nTx; ++m)
+            for (size_t j = 0; j < f.layout->size(); ++j)
+                f.H(Eigen::Index(m * f.nRx + i), Eigen::Index(j)) *= std::complex<float>(
+                    std::polar(1.0, w * f.layout->subcarriers[j] - st->deltaPhase_rad));
+    }
+    return all;
 }
 
 RejectReason FramePreparer::prepare(
@@ -158,6 +183,13 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     Channel& ch = channels_[key(f.chanspec)];
     const unsigned n = f.nRx;
     const size_t nSub = f.layout->size();
+    // A frame whose chain state could not be measured can't be grouped: leave it out.
+    if (std::find(f.chainState.begin(), f.chainState.end(), kUnknownChainState) !=
+        f.chainState.end())
+    {
+        ++ch.unknownStateFrames;
+        return;
+    }
     if (!ch.layout)
     {
         ch.layout = f.layout;
@@ -172,13 +204,17 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
 
     // One open segment per transmitter: a pose error shifts each transmitter's bearings its own
     // way, and two transmitters pooled in one covariance would make it rank two.
+    // One jump state per chain per segment, so each state's correction applies to whole
+    // segments.
     const auto open = ch.openSegment.find(f.transmitter);
     if (open == ch.openSegment.end() || f.time_s - ch.segments[open->second].t0 > opts_.segment_s ||
-        f.time_s < ch.segments[open->second].t0)
+        f.time_s < ch.segments[open->second].t0 ||
+        ch.segments[open->second].chainState != f.chainState)
     {
         Segment s;
         s.t0 = f.time_s;
         s.transmitter = f.transmitter;
+        s.chainState = f.chainState;
         s.R.assign(nSub, Eigen::MatrixXcd::Zero(n, n));
         ch.segments.push_back(std::move(s));
         ch.openSegment[f.transmitter] = ch.segments.size() - 1;
@@ -220,6 +256,14 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     ++seg.frames;
     ++ch.frames;
     ch.tLast = f.time_s;
+    for (unsigned i = 1; i < f.chainState.size() && i < f.chainDelay_s.size(); ++i)
+    {
+        auto& st = ch.states[{i, f.chainState[i]}];
+        ++st.frames;
+        st.delaySum_s += f.chainDelay_s[i];
+    }
+    if (!ch.lastStates.empty() && ch.lastStates != f.chainState) ++ch.stateChanges;
+    ch.lastStates = f.chainState;
     if (f.hasGeometry)
     {
         ch.foldedAoa.push_back(float(foldBearing(array_, f.expectedAoa_rad)));
@@ -356,14 +400,83 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
 
     ChannelCalibration out;
     auto& d = out.diag;
+
+    // Jump states: each chain's most visited state is its reference; every other state is
+    // measured against it from the pooled, bearing-suppressed cross products with antenna 0
+    // (the drive is the same, only the grouping changes), then each segment's covariances are
+    // turned into the reference states so one fit uses every frame.
+    std::map<std::pair<unsigned, uint8_t>, ChainStateDiagnostics> states;
+    std::vector<uint8_t> referenceState(n, 0);
+    for (unsigned i = 1; i < n; ++i)
+    {
+        size_t most = 0;
+        for (const auto& [key, st] : ch.states)
+            if (key.first == i && st.frames > most)
+                most = st.frames, referenceState[i] = key.second;
+    }
+    const auto crossProducts = [&](unsigned i, uint8_t state)
+    {
+        Eigen::MatrixXcf c = Eigen::MatrixXcf::Zero(1, Eigen::Index(nSub));
+        for (const auto& s : ch.segments)
+            if (s.chainState.size() > i && s.chainState[i] == state)
+                for (size_t j = 0; j < nSub; ++j)
+                    c(0, Eigen::Index(j)) += std::complex<float>(std::conj(s.R[j](0, i)));
+        return c;
+    };
+    for (const auto& [key, st] : ch.states)
+    {
+        ChainStateDiagnostics sd;
+        sd.antenna = key.first;
+        sd.state = key.second;
+        sd.frames = st.frames;
+        sd.delay_s = st.frames ? st.delaySum_s / double(st.frames) : 0.0;
+        sd.reference = key.second == referenceState[key.first];
+        if (!sd.reference)
+        {
+            const Eigen::MatrixXcf ref = crossProducts(key.first, referenceState[key.first]);
+            Eigen::MatrixXcf rel = crossProducts(key.first, key.second);
+            rel = rel.cwiseProduct(ref.conjugate());
+            const double slope = CsiPreprocessor::estimatePhaseSlope(rel, ch.layout->subcarriers);
+            sd.deltaDelay_s = -slope / (2 * M_PI * kSubcarrierSpacingHz);
+            std::complex<double> sum{0, 0};
+            for (size_t j = 0; j < nSub; ++j)
+                sum += std::complex<double>(rel(0, Eigen::Index(j))) *
+                       std::polar(1.0, -slope * ch.layout->subcarriers[j]);
+            sd.deltaPhase_rad = std::arg(sum);
+        }
+        states[key] = sd;
+    }
+    std::vector<Segment> segments = ch.segments;
+    if (!states.empty())
+        for (auto& s : segments)
+        {
+            // R'(a, b) = d_a·R(a, b)·conj(d_b), d_i = e^{j(2π·k·Δf·Δd_i − Δψ_i)}.
+            std::vector<double> dd(n, 0.0), dp(n, 0.0);
+            for (unsigned i = 1; i < n && i < s.chainState.size(); ++i)
+                if (const auto it = states.find({i, s.chainState[i]}); it != states.end())
+                    dd[i] = it->second.deltaDelay_s, dp[i] = it->second.deltaPhase_rad;
+            for (size_t j = 0; j < nSub; ++j)
+            {
+                Eigen::VectorXcd dj(n);
+                for (unsigned i = 0; i < n; ++i)
+                    dj[i] = std::polar(
+                        1.0, 2 * M_PI * kSubcarrierSpacingHz * dd[i] * ch.layout->subcarriers[j] -
+                                 dp[i]);
+                s.R[j] = dj.asDiagonal() * s.R[j] * dj.conjugate().asDiagonal();
+            }
+        }
+    for (const auto& [key, sd] : states) d.chainStates.push_back(sd);
+    d.chainStateChanges = ch.stateChanges;
+    d.unknownStateFrames = ch.unknownStateFrames;
+
     d.frames = ch.frames;
     d.snapshots = ch.snapshots;
-    d.segments = ch.segments.size();
+    d.segments = segments.size();
     d.duration_s = ch.tLast - ch.tFirst;
 
     // Pooled covariances and the coarse calibration: principal component per subcarrier.
     std::vector<Eigen::MatrixXcd> pooled(nSub, Eigen::MatrixXcd::Zero(n, n));
-    for (const auto& s : ch.segments)
+    for (const auto& s : segments)
         for (size_t j = 0; j < nSub; ++j) pooled[j] += s.R[j];
     out.coarsePhases_rad.assign(n, std::vector<double>(nSub, 0.0));
     std::vector<double> phi((n - 1) * nSub, 0.0);
@@ -413,7 +526,7 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
     for (size_t j = 0; j < nSub; ++j)
         for (unsigned i = 1; i < n; ++i) blocks[j * (n - 1) + (i - 1)] = phi[(i - 1) * nSub + j];
     size_t residualBlocks = 0;
-    for (const auto& s : ch.segments)
+    for (const auto& s : segments)
     {
         if (s.frames == 0) continue;
         const double norm = double(n) * double(s.frames);
@@ -467,7 +580,7 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
 
     // Share of frames in segments the calibrated line of sight explains well.
     double losFrames = 0, allFrames = 0;
-    for (const auto& s : ch.segments)
+    for (const auto& s : segments)
     {
         double num = 0, den = 0;
         for (size_t j = 0; j < nSub; ++j)
@@ -502,6 +615,17 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
         for (unsigned i = 0; i < n; ++i)
             c.gains_dB[i] =
                 10 * std::log10(std::max(ch.antennaPower[i], 1e-30) / ch.antennaPower[0]);
+    }
+    for (const auto& sd : d.chainStates)
+    {
+        ChainStateCalibration st;
+        st.antenna = sd.antenna;
+        st.state = sd.state;
+        st.delay_s = sd.delay_s;
+        st.deltaDelay_s = sd.deltaDelay_s;
+        st.deltaPhase_rad = sd.deltaPhase_rad;
+        st.frames = sd.frames;
+        c.chainStates.push_back(st);
     }
     c.validate("calibration of " + cs.asString());
 
@@ -565,7 +689,23 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
     if (drive && !ch.kept.empty())
     {
         out.bearingErrorBefore_deg = bearingErrors_deg(ch.kept, array_, nullptr);
-        out.bearingErrorAfter_deg = bearingErrors_deg(ch.kept, array_, &c);
+        std::vector<CalibrationFrame> corrected;
+        corrected.reserve(ch.kept.size());
+        for (const auto& f : ch.kept)
+        {
+            corrected.push_back(f);
+            if (!removeChainStates(c, corrected.back())) corrected.pop_back();
+        }
+        out.bearingErrorAfter_deg = bearingErrors_deg(corrected, array_, &c);
+        if (!out.bearingErrorAfter_deg.empty() &&
+            quantile(out.bearingErrorAfter_deg, 0.9) > opts_.maxP90Error_deg)
+            w.push_back(
+                "the calibration does not explain the drive: 90 % of its frames' bearings are "
+                "within " +
+                fmt(quantile(out.bearingErrorAfter_deg, 0.9)) + "° only (limit " +
+                fmt(opts_.maxP90Error_deg, 0) +
+                "°): wrong transmitter position or poses, or the receive chains changed state "
+                "in a way the drive could not separate");
     }
     return out;
 }

@@ -30,6 +30,8 @@ const char* toString(RejectReason r)
             return "unsupported bandwidth";
         case RejectReason::SingleAntenna:
             return "one receive antenna: no angle of arrival (CSI still recorded)";
+        case RejectReason::UnknownChainState:
+            return "a receive chain in a jump state the calibration lacks (or unmeasurable)";
     }
     return "?";
 }
@@ -267,6 +269,7 @@ CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(
                     std::polar(gain, -c.calibration->phaseAt(i, c.layout->subcarriers[j])));
         }
     }
+    c.states = ChainStateTracker(nRx, c.calibration, options_.chainStates);
     return caches_.emplace(key, std::move(c)).first->second;
 }
 
@@ -403,7 +406,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     out.invalidateCaches();
     out.H.resize(Eigen::Index(out.nTx * nRx), Eigen::Index(nSub));
 
-    // Gather, sign-correct, calibrate.
+    // Gather and sign-correct.
     for (unsigned s = 0; s < out.nTx; ++s)
         for (unsigned i = 0; i < nRx; ++i)
         {
@@ -414,10 +417,9 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
                 for (size_t j = 0; j < nSub; ++j)
                     row[Eigen::Index(j)] *= std::complex<float>(
                         cache.sign[Eigen::Index(j)], cache.signImag[Eigen::Index(j)]);
-            if (cache.calibration) row = row.cwiseProduct(cache.calibrationFactors.row(i));
         }
 
-    // Masked bins hold no measurement: zero now (no weight in the slope), repaired below.
+    // Masked bins hold no measurement: zero now (no weight in the slopes), repaired below.
     std::vector<size_t> masked;
     for (uint16_t b : in.maskedBins)
     {
@@ -428,6 +430,44 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
             out.H.col(Eigen::Index(masked.back())).setZero();
         }
     }
+
+    // Jump states: classify each chain, then undo its state's delay and phase (relative to the
+    // chain's reference state, in which the calibration holds).
+    out.chainDelay_s.clear();
+    out.chainState.clear();
+    int learning = -1;  // a chain in a state the calibration lacks, whose phase is being learnt
+    if (options_.trackChainStates)
+    {
+        measureChainDelays(out.H, nRx, layout.subcarriers, out.chainDelay_s, chainCoherence_);
+        cache.states.classify(out.chainDelay_s, chainCoherence_, out.chainState);
+        for (unsigned i = 1; i < nRx && cache.states.applies(); ++i)
+        {
+            if (out.chainState[i] == kUnknownChainState) return RejectReason::UnknownChainState;
+            const ChainStateInfo& st = cache.states.info(i, out.chainState[i]);
+            if (!st.resolved())
+            {
+                if (learning >= 0) return RejectReason::UnknownChainState;  // one at a time
+                learning = int(i);
+            }
+            if (st.deltaDelay_s == 0 && st.deltaPhase_rad == 0) continue;
+            const double w = 2 * M_PI * kSubcarrierSpacingHz * st.deltaDelay_s;
+            for (unsigned s = 0; s < out.nTx; ++s)
+            {
+                auto row = out.H.row(Eigen::Index(s * nRx + i));
+                for (size_t j = 0; j < nSub; ++j)
+                    row[Eigen::Index(j)] *= std::complex<float>(
+                        std::polar(1.0, w * layout.subcarriers[j] - st.deltaPhase_rad));
+            }
+        }
+    }
+
+    if (cache.calibration)
+        for (unsigned s = 0; s < out.nTx; ++s)
+            for (unsigned i = 0; i < nRx; ++i)
+            {
+                auto row = out.H.row(Eigen::Index(s * nRx + i));
+                row = row.cwiseProduct(cache.calibrationFactors.row(i));
+            }
 
     out.removedSlope_rad = 0;
     out.removedDelay_s = 0;
@@ -507,7 +547,87 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
         const float meanPower = out.H.squaredNorm() / float(out.H.size());
         if (meanPower > 0) out.H *= 1.0f / std::sqrt(meanPower);
     }
+    if (learning >= 0)
+    {
+        learnChainState(cache, out, unsigned(learning));
+        return RejectReason::UnknownChainState;
+    }
     return RejectReason::Accepted;
+}
+
+void CsiPreprocessor::learnChainState(ChannelCache& cache, const CleanCsi& f, unsigned chain)
+{
+    // The other chains must all be corrected for the bearing to mean anything.
+    for (unsigned i = 1; i < f.nRx; ++i)
+        if (i != chain && !cache.states.info(i, f.chainState[i]).resolved()) return;
+    const SubcarrierLayout& layout = *f.layout;
+    const size_t nSub = layout.size();
+    const auto steering = [&](unsigned i, double theta, size_t j)
+    {
+        const double p = 2 * M_PI * rxArray_.projection(i, theta) / kSpeedOfLightMps;
+        return std::polar(1.0, -p * layout.frequencies_Hz[j]);  // conj(a_i(θ, f_j))
+    };
+    // Wideband Bartlett of the other chains: 1° grid, then 0.05° around the best.
+    const auto power = [&](double theta)
+    {
+        double sum = 0;
+        for (unsigned m = 0; m < f.nTx; ++m)
+            for (size_t j = 0; j < nSub; ++j)
+            {
+                std::complex<double> acc{0, 0};
+                for (unsigned i = 0; i < f.nRx; ++i)
+                    if (i != chain)
+                        acc += std::complex<double>(
+                                   f.H(Eigen::Index(m * f.nRx + i), Eigen::Index(j))) *
+                               steering(i, theta, j);
+                sum += std::norm(acc);
+            }
+        return sum;
+    };
+    const auto [lo, hi] = rxArray_.searchInterval();
+    double best = lo, bestPower = -1;
+    for (double t = lo; t <= hi; t += M_PI / 180)
+        if (const double p = power(t); p > bestPower) bestPower = p, best = t;
+    const double coarse = best;
+    for (double t = coarse - M_PI / 180; t <= coarse + M_PI / 180; t += M_PI / 3600)
+        if (const double p = power(t); p > bestPower) bestPower = p, best = t;
+    std::complex<double> z{0, 0};
+    for (unsigned m = 0; m < f.nTx; ++m)
+        for (size_t j = 0; j < nSub; ++j)
+        {
+            std::complex<double> others{0, 0};
+            for (unsigned i = 0; i < f.nRx; ++i)
+                if (i != chain)
+                    others +=
+                        std::complex<double>(f.H(Eigen::Index(m * f.nRx + i), Eigen::Index(j))) *
+                        steering(i, best, j);
+            z += std::complex<double>(f.H(Eigen::Index(m * f.nRx + chain), Eigen::Index(j))) *
+                 steering(chain, best, j) * std::conj(others);
+        }
+    cache.states.addLearningEvidence(chain, f.chainState[chain], z);
+}
+
+std::vector<const ChainStateTracker*> CsiPreprocessor::chainStateTrackers() const
+{
+    std::vector<const ChainStateTracker*> out;
+    for (const auto& [key, c] : caches_) out.push_back(&c.states);
+    return out;
+}
+
+std::vector<std::string> CsiPreprocessor::takeChainStateNotices()
+{
+    std::vector<std::string> out;
+    for (auto& [key, c] : caches_)
+        for (auto& n : c.states.takeNotices())
+            out.push_back(c.layout->chanspec.asString() + " " + n);
+    return out;
+}
+
+uint64_t CsiPreprocessor::chainStateChanges() const
+{
+    uint64_t n = 0;
+    for (const auto& [key, c] : caches_) n += c.states.totalChanges();
+    return n;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -99,7 +99,9 @@ PhaseCalibration PhaseCalibration::fromYamlText(
         "subband_sign_corrected",
         "role",
         "transmitter",
-        "aod_residual_rad"};
+        "aod_residual_rad",
+        "chain_states",
+        "chain_state_tolerance_ns"};
     for (const auto& kv : doc.asMap())
     {
         const std::string key = kv.first.as<std::string>();
@@ -117,6 +119,9 @@ PhaseCalibration PhaseCalibration::fromYamlText(
     if (version < 2)
         for (const char* k : {"role", "transmitter", "aod_residual_rad"})
             if (doc.has(k)) fail(w, std::string("key '") + k + "' needs version 2");
+    if (version < 3)
+        for (const char* k : {"chain_states", "chain_state_tolerance_ns"})
+            if (doc.has(k)) fail(w, std::string("key '") + k + "' needs version 3");
 
     PhaseCalibration c;
     if (doc.has("role"))
@@ -167,6 +172,40 @@ PhaseCalibration PhaseCalibration::fromYamlText(
     if (!rows.isSequence()) fail(w, "'phases_rad' must be a list of per-antenna lists");
     for (const auto& r : rows.asSequence()) c.phases_rad.push_back(numberList(r, "phases_rad", w));
     if (doc.has("gains_db")) c.gains_dB = numberList(doc["gains_db"], "gains_db", w);
+    if (doc.has("chain_state_tolerance_ns"))
+        c.chainStateTolerance_s =
+            asValue<double>(doc["chain_state_tolerance_ns"], "chain_state_tolerance_ns", w) * 1e-9;
+    if (doc.has("chain_states"))
+    {
+        const auto& states = doc["chain_states"];
+        if (!states.isSequence()) fail(w, "'chain_states' must be a list of maps");
+        for (const auto& node : states.asSequence())
+        {
+            const mrpt::containers::yaml e(node);
+            if (!e.isMap()) fail(w, "every entry of 'chain_states' must be a map");
+            for (const auto& kv : e.asMap())
+            {
+                const std::string key = kv.first.as<std::string>();
+                static const char* knownState[] = {"antenna",        "state",           "delay_ns",
+                                                   "delta_delay_ns", "delta_phase_rad", "frames"};
+                if (std::find(std::begin(knownState), std::end(knownState), key) ==
+                    std::end(knownState))
+                    fail(w, "unknown key '" + key + "' in 'chain_states'");
+            }
+            ChainStateCalibration st;
+            st.antenna = asValue<unsigned>(required(e, "antenna", w), "antenna", w);
+            const unsigned id = asValue<unsigned>(required(e, "state", w), "state", w);
+            if (id > 254) fail(w, "chain state ids must be 0..254");
+            st.state = uint8_t(id);
+            st.delay_s = asValue<double>(required(e, "delay_ns", w), "delay_ns", w) * 1e-9;
+            st.deltaDelay_s =
+                asValue<double>(required(e, "delta_delay_ns", w), "delta_delay_ns", w) * 1e-9;
+            st.deltaPhase_rad =
+                asValue<double>(required(e, "delta_phase_rad", w), "delta_phase_rad", w);
+            if (e.has("frames")) st.frames = asValue<uint64_t>(e["frames"], "frames", w);
+            c.chainStates.push_back(st);
+        }
+    }
     const size_t antennas = asValue<size_t>(required(doc, "antennas", w), "antennas", w);
     if (antennas != c.phases_rad.size())
         fail(
@@ -174,6 +213,24 @@ PhaseCalibration PhaseCalibration::fromYamlText(
                    std::to_string(c.phases_rad.size()) + " rows");
     c.validate(w);
     return c;
+}
+
+const ChainStateCalibration* PhaseCalibration::findChainState(unsigned antenna, uint8_t state) const
+{
+    for (const auto& st : chainStates)
+        if (st.antenna == antenna && st.state == state) return &st;
+    return nullptr;
+}
+
+const ChainStateCalibration* PhaseCalibration::matchChainState(
+    unsigned antenna, double delay_s) const
+{
+    const ChainStateCalibration* best = nullptr;
+    for (const auto& st : chainStates)
+        if (st.antenna == antenna && std::abs(delay_s - st.delay_s) <= chainStateTolerance_s &&
+            (!best || std::abs(delay_s - st.delay_s) < std::abs(delay_s - best->delay_s)))
+            best = &st;
+    return best;
 }
 
 void PhaseCalibration::validate(const std::string& where) const
@@ -208,6 +265,25 @@ void PhaseCalibration::validate(const std::string& where) const
     }
     if (role == Role::Transmitter && (!std::isfinite(aodResidual_rad) || aodResidual_rad < 0))
         fail(where, "aod_residual_rad must be finite and >= 0");
+    if (!(chainStateTolerance_s > 0) || !std::isfinite(chainStateTolerance_s))
+        fail(where, "chain_state_tolerance_ns must be > 0");
+    for (size_t a = 0; a < chainStates.size(); ++a)
+    {
+        const auto& st = chainStates[a];
+        if (st.antenna < 1 || st.antenna >= phases_rad.size())
+            fail(
+                where, "chain_states: antenna " + std::to_string(st.antenna) +
+                           " is not one of 1.." + std::to_string(phases_rad.size() - 1) +
+                           " (antenna 0 is the reference)");
+        if (!std::isfinite(st.delay_s) || !std::isfinite(st.deltaDelay_s) ||
+            !std::isfinite(st.deltaPhase_rad))
+            fail(where, "chain_states holds a non-finite value");
+        for (size_t b = 0; b < a; ++b)
+            if (chainStates[b].antenna == st.antenna && chainStates[b].state == st.state)
+                fail(
+                    where, "chain_states lists antenna " + std::to_string(st.antenna) + " state " +
+                               std::to_string(int(st.state)) + " twice");
+    }
     if (!gains_dB.empty() && gains_dB.size() != phases_rad.size())
         fail(
             where, "gains_db has " + std::to_string(gains_dB.size()) + " values for " +
@@ -222,7 +298,8 @@ std::string PhaseCalibration::asYamlText() const
     o << "# mrpt_wifi phase calibration: CSI of antenna i at subcarrier k is multiplied by\n"
          "# exp(-j*phases_rad[i][k]) * 10^(-gains_db[i]/20) after the sub-band sign correction.\n";
     o << "format: mrpt_wifi_phase_calibration\n";
-    o << "version: " << kFormatVersion << "\n";
+    // The lowest version that holds the content, so older readers still read what they can.
+    o << "version: " << (chainStates.empty() ? 2 : kFormatVersion) << "\n";
     if (role == Role::Transmitter)
         o << "role: transmitter\n"
           << "transmitter: '" << transmitter.asString() << "'\n"
@@ -249,6 +326,19 @@ std::string PhaseCalibration::asYamlText() const
         o << "gains_db: [";
         for (size_t i = 0; i < gains_dB.size(); ++i) o << (i ? ", " : "") << gains_dB[i];
         o << "]\n";
+    }
+    if (!chainStates.empty())
+    {
+        o << "# jump states: antenna i in state s is first multiplied by\n"
+             "# exp(+j*2*pi*k*312.5e3*delta_delay) * exp(-j*delta_phase_rad)\n";
+        o << "chain_state_tolerance_ns: " << chainStateTolerance_s * 1e9 << "\n";
+        o << "chain_states:\n";
+        for (const auto& st : chainStates)
+            o << "  - antenna: " << st.antenna << "\n    state: " << int(st.state)
+              << "\n    delay_ns: " << st.delay_s * 1e9
+              << "\n    delta_delay_ns: " << st.deltaDelay_s * 1e9
+              << "\n    delta_phase_rad: " << st.deltaPhase_rad << "\n    frames: " << st.frames
+              << "\n";
     }
     return o.str();
 }

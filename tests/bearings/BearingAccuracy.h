@@ -80,6 +80,41 @@ inline PhaseCalibration truthCalibration(
         cal.phases_rad.push_back(row);
         cal.gains_dB.push_back(ch.gain_dB);
     }
+    // Jump states: state s of chain i adds a delay τ_s (phase −2π·f_k·τ_s) and its own phase;
+    // relative to state 0 that is deltaDelay = τ_s, deltaPhase = −2π·f_c·τ_s + own phase. The
+    // centre a frame is classified by is the delay the chain's response itself implies (its
+    // phase slope relative to chain 0) plus τ_s.
+    const auto& hw = simulator.hardware();
+    if (hw.spec().antennaJumps)
+    {
+        const double fc = cs.centerFrequencyHz();
+        for (size_t i = 1; i < rx.size() && i < hw.chains(); ++i)
+        {
+            double sk = 0, skk = 0, sp = 0, skp = 0;
+            const double n = double(cal.subcarriers.size());
+            for (size_t j = 0; j < cal.subcarriers.size(); ++j)
+            {
+                const double k = cal.subcarriers[j];
+                const double p = cal.phases_rad[i][j] - cal.phases_rad[0][j];
+                sk += k, skk += k * k, sp += p, skp += k * p;
+            }
+            const double slope = (n * skp - sk * sp) / (n * skk - sk * sk);
+            const double ownDelay = -slope / (2 * M_PI * kSubcarrierSpacingHz);
+            for (unsigned st = 0; st < hw.spec().jumpStates; ++st)
+            {
+                ChainStateCalibration c;
+                c.antenna = unsigned(i);
+                c.state = uint8_t(st);
+                c.deltaDelay_s = hw.jumpStateDelay_s(uint8_t(st));
+                c.delay_s = ownDelay + c.deltaDelay_s;
+                c.deltaPhase_rad = wrapAngle(
+                    -2 * M_PI * std::fmod(fc * c.deltaDelay_s, 1.0) +
+                    hw.jumpStatePhase_rad(unsigned(i), uint8_t(st)) -
+                    hw.jumpStatePhase_rad(unsigned(i), 0));
+                cal.chainStates.push_back(c);
+            }
+        }
+    }
     return cal;
 }
 
@@ -373,6 +408,9 @@ struct StreamCase
     unsigned stride = 8;     //!< one estimate per transmitter every `stride` frames
     /** BearingProcessor::Options::tracking (nullopt: the processor's default). */
     std::optional<bool> tracking;
+    /** The 4366c0's jump states switched on at this rate [Hz] (0: off), three states 3 ns
+     *  apart, each with its own phase; the truth calibration holds every state. */
+    double jumpRate_Hz = 0;
 };
 
 /** Whole-stream evaluation: one random room's odometry and CSI in time order through one
@@ -394,6 +432,14 @@ inline size_t streamErrors(
         sc.odometry.yawScaleError = 0.02;
         sc.odometry.yawDrift_rad_per_m = 1.0 * M_PI / 180;
     }
+    if (c.jumpRate_Hz > 0)
+    {
+        sc.impairments.antennaJumps = true;
+        sc.impairments.jumpStates = 3;
+        sc.impairments.jumpStep_s = 3e-9;
+        sc.impairments.jumpRate_Hz = c.jumpRate_Hz;
+        sc.impairments.jumpStatePhase = true;
+    }
     sim::Simulator simulator(sc);
     const AntennaArray rx = fromSimArray(sc.receiver.array);
     const PhaseCalibration cal = truthCalibration(simulator, rx, sc.transmitters.front().chanspec);
@@ -403,8 +449,10 @@ inline size_t streamErrors(
         bearing::BearingProcessor::Options o;
         o.stride = c.stride;
         o.tracking = c.tracking;
+        PreprocessOptions po;
+        po.trackChainStates = c.jumpRate_Hz > 0;
         procs.push_back(std::make_unique<bearing::BearingProcessor>(
-            CsiPreprocessor({}, rx, CalibrationStore::fromCalibration(cal)),
+            CsiPreprocessor(po, rx, CalibrationStore::fromCalibration(cal)),
             bearing::createEstimator(a, params), o));
         for (const auto& t : sc.transmitters)
             procs.back()->setTransmitterArray(t.mac, fromSimArray(t.array));

@@ -105,7 +105,11 @@ int streamTables(
               << "transmitter every " << c.stride << " frames, " << toString(c.poses)
               << ", tracking "
               << (c.tracking ? (*c.tracking ? "on" : "off") : "default (on for `default`)") << ", "
-              << toString(c.base.environment) << ", true receiver offsets\n\n"
+              << toString(c.base.environment) << ", true receiver offsets";
+    if (c.jumpRate_Hz > 0)
+        std::cout << ", jump states on (3 states 3 ns apart, each with its own phase, switching "
+                  << "at " << c.jumpRate_Hz << " Hz; the calibration holds every state)";
+    std::cout << "\n\n"
               << "| estimator | SNR [dB] | median (central) | p90 (central) | >30° (central) "
                  "| >30° (all) | median (all) | ≤2σ | ≤3σ | median σ (central / all) | CRB | "
                  "estimates |\n"
@@ -243,6 +247,16 @@ int main(int argc, char** argv)
             sc.stride = unsigned(std::max(1, std::atoi(argv[++i])));
             continue;
         }
+        if (!std::strcmp(argv[i], "--jumps") && i + 1 < argc)
+        {
+            sc.jumpRate_Hz = std::atof(argv[++i]);
+            if (!(sc.jumpRate_Hz >= 0))
+            {
+                std::cerr << "--jumps: a switching rate in Hz (0: off)\n";
+                return 1;
+            }
+            continue;
+        }
         if (!std::strcmp(argv[i], "--los"))
         {
             sc.base.environment = Environment::LineOfSight;
@@ -282,7 +296,8 @@ int main(int argc, char** argv)
                    "         [--receiver rt-ac86u|intel5300]\n"
                    "       bearing-accuracy --rooms N --stream [--development] [--snr DB] "
                    "[--algo NAME]... [--params YAML] [--poses truth|odometry|drifting|none] "
-                   "[--tracking on|off] [--duration S] [--stride N] [--los] [--dump CSV]\n";
+                   "[--tracking on|off] [--duration S] [--stride N] [--los] [--jumps HZ] "
+                   "[--dump CSV]\n";
             return 1;
         }
     }

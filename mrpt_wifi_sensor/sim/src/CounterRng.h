@@ -79,7 +79,8 @@ enum RngTag : uint64_t
     kTagOdometry,
     kTagNoiseTable,
     kTagSequence,
-    kTagTxChain = 0x7478  //!< transmit chains ("tx"; apart from the sequential tags)
+    kTagTxChain = 0x7478,   //!< transmit chains ("tx"; apart from the sequential tags)
+    kTagJumpPhase = 0x6a70  //!< per-state phase of the jump states ("jp")
 };
 
 }  // namespace mrpt_wifi::sim::detail

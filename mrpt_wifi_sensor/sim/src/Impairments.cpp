@@ -105,7 +105,15 @@ uint8_t HardwareModel::jumpState(unsigned rx, double t_s) const
 
 double HardwareModel::jumpDelay_s(unsigned rx, double t_s) const
 {
-    return jumpState(rx, t_s) * spec_.jumpStep_s;
+    return jumpStateDelay_s(jumpState(rx, t_s));
+}
+
+double HardwareModel::jumpStatePhase_rad(unsigned rx, uint8_t state) const
+{
+    if (!spec_.antennaJumps || !spec_.jumpStatePhase || rx == 0 || state == 0) return 0.0;
+    mrpt::random::CRandomGenerator rng(
+        seed32(hashKey({seed_, detail::kTagJumpPhase, boot_, rx, state})));
+    return rng.drawUniform(-M_PI, M_PI);
 }
 
 bool HardwareModel::isDeadCore(unsigned rx) const
@@ -151,6 +159,15 @@ void HardwareModel::writeJson(
     }
     o << "\n" << pad << "  ],\n";
     o << pad << "  \"jump_step_s\": " << spec_.jumpStep_s << ",\n";
+    o << pad << "  \"jump_state_phase_rad\": [";
+    for (unsigned rx = 0; rx < nRx_; ++rx)
+    {
+        o << (rx ? ", " : "") << "[";
+        for (unsigned st = 0; st < (spec_.antennaJumps ? spec_.jumpStates : 1u); ++st)
+            o << (st ? ", " : "") << jumpStatePhase_rad(rx, uint8_t(st));
+        o << "]";
+    }
+    o << "],\n";
     o << pad << "  \"jump_events\": [";
     for (unsigned rx = 0; rx < nRx_; ++rx)
     {

@@ -348,11 +348,12 @@ struct Reader
         s.timingJitter = n.doubleOr("timing_jitter", s.timingJitter);
         if (auto j = n.get("antenna_jumps"))
         {
-            j->allowOnly({"enabled", "states", "step_ns", "rate_hz"});
+            j->allowOnly({"enabled", "states", "step_ns", "rate_hz", "state_phase"});
             s.antennaJumps = j->boolOr("enabled", true);
             s.jumpStates = j->unsignedOr("states", s.jumpStates, 16);
             s.jumpStep_s = j->doubleOr("step_ns", s.jumpStep_s * 1e9) * 1e-9;
             s.jumpRate_Hz = j->doubleOr("rate_hz", s.jumpRate_Hz);
+            s.jumpStatePhase = j->boolOr("state_phase", s.jumpStatePhase);
         }
         if (auto d = n.get("dead_cores"))
             for (size_t i = 0; i < d->size(); ++i) s.deadCores.push_back(d->at(i).asUnsigned(7));

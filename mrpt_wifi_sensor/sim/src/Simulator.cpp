@@ -382,9 +382,10 @@ void Simulator::synthesizeFrame(
         const double gain = agc * dB2amplitude(pk.chainAgc_dB[i]);
         const double delay = pk.samplingTimeOffset_s;     // baseband: phase −2π·k·Δf·STO
         const double jump = hardware_.jumpDelay_s(i, t);  // RF: phase −2π·f_k·τ_jump
+        const double jumpPhase = hardware_.jumpStatePhase_rad(i, pk.jumpState[i]);
         // Start at the lowest bin and step with one complex multiply per bin.
         std::complex<double> f = std::polar(
-            gain, pk.cfoPhase_rad - 2 * M_PI * (kFirst * kSubcarrierSpacingHz * delay) -
+            gain, pk.cfoPhase_rad + jumpPhase - 2 * M_PI * (kFirst * kSubcarrierSpacingHz * delay) -
                       2 * M_PI * std::fmod((fc + kFirst * kSubcarrierSpacingHz) * jump, 1.0));
         const std::complex<double> step =
             std::polar(1.0, -2 * M_PI * kSubcarrierSpacingHz * (delay + jump));

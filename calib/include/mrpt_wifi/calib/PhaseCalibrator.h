@@ -33,7 +33,18 @@ struct CalibrationFrame
     double expectedAoa_rad = 0;      //!< line-of-sight direction of the transmitter, sensor frame
     double distance_m = 0;           //!< receive array to transmitter
     mrpt::math::TPose2D sensorPose;  //!< receive array in the transmitter's frame
+
+    /** Per receive chain: delay relative to chain 0 [s] and jump state id as the preparer's
+     *  tracker classified it (empty: not tracked; kUnknownChainState: not measurable). */
+    std::vector<double> chainDelay_s;
+    std::vector<uint8_t> chainState;
 };
+
+/** Undoes each chain's jump state as a calibration holds it (the state matched by the frame's
+ *  measured delay): H of chain i is multiplied by e^{+j2πkΔf·Δd}·e^{−jΔψ}. False (frame left
+ *  as it was or partly corrected) if a chain's delay matches no state of the calibration; true
+ *  without change for a state-unaware calibration. */
+bool removeChainStates(const PhaseCalibration& c, CalibrationFrame& f);
 
 /** Preprocessing used for calibration: sub-band sign correction, STO/CFO removal and power
  *  normalisation on; no calibration applied; the firmware-overwritten subcarrier left out. */
@@ -55,6 +66,12 @@ public:
         const mrpt::math::TPoint2D& transmitter, CalibrationFrame& out);
     /** Splitter mode: no geometry. */
     RejectReason prepareStatic(const CObservationWiFiCSI& obs, CalibrationFrame& out);
+
+    /** The jump states seen so far (every channel). */
+    std::vector<const ChainStateTracker*> chainStateTrackers() const
+    {
+        return pre_.chainStateTrackers();
+    }
 
 private:
     RejectReason common(const CObservationWiFiCSI& obs, CalibrationFrame& out);
@@ -92,11 +109,27 @@ struct CalibratorOptions
     double maxMedianDistance_m = 8;  //!< the paper drives within 5 m
     double losCoherence = 0.8;       //!< a segment is LoS-dominated if the fit explains this
     double minLosShare = 0.5;        //!< share of frames in LoS-dominated segments
+    /** Drive mode: warn when the calibration leaves this 90th-percentile bearing error on the
+     *  drive's own frames (it does not explain the drive). */
+    double maxP90Error_deg = 20;
+};
+
+/** One jump state of one chain as the calibration drive saw it. */
+struct ChainStateDiagnostics
+{
+    unsigned antenna = 1;
+    uint8_t state = 0;
+    size_t frames = 0;
+    double delay_s = 0, deltaDelay_s = 0, deltaPhase_rad = 0;
+    bool reference = false;  //!< the chain's most visited state (phases_rad hold in it)
 };
 
 /** What the fit found out about the data (numbers for stdout and the report). */
 struct CalibrationDiagnostics
 {
+    std::vector<ChainStateDiagnostics> chainStates;  //!< every state of every chain ≥ 1
+    uint64_t chainStateChanges = 0;
+    size_t unknownStateFrames = 0;  //!< frames left out: a chain's state not measurable
     size_t frames = 0, snapshots = 0, segments = 0;
     double duration_s = 0;
     unsigned bearingBins = 0;    //!< occupied bins of the expected-bearing histogram
@@ -162,6 +195,12 @@ private:
         size_t frames = 0;
         std::vector<Eigen::MatrixXcd> R;  //!< [subcarrier] Σ x x^H
         MacAddress transmitter;           //!< one transmitter's frames (one geometry) per segment
+        std::vector<uint8_t> chainState;  //!< one jump state per chain per segment
+    };
+    struct StateStats
+    {
+        size_t frames = 0;
+        double delaySum_s = 0;
     };
     struct Channel
     {
@@ -175,6 +214,10 @@ private:
         std::vector<float> foldedAoa, distance;
         std::vector<CalibrationFrame> kept;
         size_t keepStride = 1, seen = 0;
+        std::map<std::pair<unsigned, uint8_t>, StateStats> states;  //!< (chain, state)
+        size_t unknownStateFrames = 0;
+        uint64_t stateChanges = 0;
+        std::vector<uint8_t> lastStates;
     };
     static uint32_t key(const Chanspec& cs)
     {

@@ -5,6 +5,7 @@
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/ChainStates.h>
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 
 #include <Eigen/Core>
@@ -67,6 +68,15 @@ struct PreprocessOptions
     bool applyTransmitterCalibration = true;
     /** Use at most this many transmit streams per frame (the first complete ones). */
     unsigned maxStreams = 8;
+    /** Measure each frame's inter-chain delays and classify the receive chains' jump states
+     *  (ChainStates.h); with a calibration, correct each chain for its state before the
+     *  calibration, and give no bearing from a frame with a chain in a state the calibration
+     *  lacks until its phase is learnt from the other chains.
+     *  Off by default: one frame's delay is a noisy witness in multipath (issue 21 is open; see
+     *  ChainStateOptions for the figures), so the per-frame classification still misassigns a
+     *  few per cent of frames on the simulator's random rooms. */
+    bool trackChainStates = false;
+    ChainStateOptions chainStates;
 };
 
 enum class RejectReason : uint8_t
@@ -78,10 +88,13 @@ enum class RejectReason : uint8_t
     DeadAntenna,         //!< an antenna reported (almost) nothing in every stream
     NoCalibration,       //!< requireCalibration and none for this channel
     UnsupportedChannel,  //!< bandwidth without a data-subcarrier plan
-    SingleAntenna        //!< one receive antenna (e.g. an ESP32): no angle of arrival
+    SingleAntenna,       //!< one receive antenna (e.g. an ESP32): no angle of arrival
+    /** Calibrated, but a chain is in a jump state the calibration lacks (phase not learnt
+     *  yet) or its state could not be measured in this frame. */
+    UnknownChainState
 };
 const char* toString(RejectReason r);
-constexpr size_t kRejectReasonCount = 8;
+constexpr size_t kRejectReasonCount = 9;
 
 /** One CSI frame after preprocessing: the complete streams only, on the layout's subcarriers,
  *  sign-corrected, calibrated, without sampling-time offset, power-normalised. */
@@ -104,6 +117,10 @@ struct CleanCsi
     const PhaseCalibration* txCalibration = nullptr;
     double removedSlope_rad = 0;  //!< linear phase removed per subcarrier step (first stream)
     double removedDelay_s = 0;    //!< the same as a delay: −slope / (2π·312.5 kHz)
+    /** Per receive chain: delay relative to chain 0 [s] and jump state id (empty when
+     *  PreprocessOptions::trackChainStates is off; kUnknownChainState: not measurable). */
+    std::vector<double> chainDelay_s;
+    std::vector<uint8_t> chainState;
 
     /** Spatial covariance over streams and subcarriers, split into `groups` contiguous
      *  sub-bands (so each can use its own centre frequency): group g is
@@ -207,9 +224,17 @@ public:
     static double estimatePhaseSlope(
         const Eigen::Ref<const Eigen::MatrixXcf>& H, const std::vector<int>& k);
 
+    /** The jump-state trackers, one per (channel, receive chain count) seen so far. */
+    std::vector<const ChainStateTracker*> chainStateTrackers() const;
+    /** Notices of every tracker (a state the calibration lacks, a state learnt), taken once. */
+    std::vector<std::string> takeChainStateNotices();
+    /** State changes seen, summed over channels and chains. */
+    uint64_t chainStateChanges() const;
+
 private:
     struct ChannelCache
     {
+        ChainStateTracker states;
         std::shared_ptr<const SubcarrierLayout> layout;
         const PhaseCalibration* calibration = nullptr;
         Eigen::MatrixXcf calibrationFactors;  //!< [rx][subcarrier]: e^{−jφ}·10^{−g/20}
@@ -218,6 +243,10 @@ private:
         bool hasSignCorrection = false;
     };
     ChannelCache& cacheFor(const std::shared_ptr<const SubcarrierLayout>& layout, unsigned nRx);
+    /** One frame's evidence for the phase of chain `chain`'s Unresolved state: the bearing from
+     *  the other (calibrated) chains, then the chain's residual phase against it. */
+    void learnChainState(ChannelCache& cache, const CleanCsi& f, unsigned chain);
+    std::vector<double> chainCoherence_;  //!< scratch
     struct TransmitterCache
     {
         const PhaseCalibration* calibration = nullptr;

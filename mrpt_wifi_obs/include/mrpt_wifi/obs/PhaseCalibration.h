@@ -56,12 +56,45 @@ public:
  * after the per-stream sampling-time-offset removal (CsiPreprocessing). Version 1 files load as
  * receiver calibrations.
  *
+ * Version 3 adds the receive chains' jump states (the BCM4366c0's inter-chain delay jumps,
+ * ChainStates.h): for each antenna i ≥ 1 and each state s a drive visited, `delay_ns` (the
+ * measured delay of antenna i relative to antenna 0 in that state: what a frame is classified
+ * by), `delta_delay_ns` and `delta_phase_rad` (the state relative to the antenna's reference
+ * state, in which `phases_rad` holds) and `frames`. The CSI of antenna i in state s is first
+ * multiplied by e^{+j·2π·k·312.5 kHz·delta_delay}·e^{−j·delta_phase}, then as above:
+ * \code
+ * chain_state_tolerance_ns: 1.0   # a frame's delay within this of a state's is that state
+ * chain_states:
+ *   - antenna: 1
+ *     state: 0
+ *     delay_ns: 0.21
+ *     delta_delay_ns: 0
+ *     delta_phase_rad: 0
+ *     frames: 2210
+ *   - antenna: 1
+ *     state: 1
+ *     ...
+ * \endcode
+ * A file without `chain_states` is state-unaware: it holds in whatever state the chains were
+ * in when it was made.
+ *
  * Folder layout, loaded by channel (CalibrationStore): `DIR/<device>/ch<centre>_<bw>mhz.yaml`,
  * e.g. `calib/rt-ac86u/ch155_80mhz.yaml`, `calib/rt-ac86u/ch36_80mhz.yaml`; transmitters in
  * `DIR/transmitters/<mac with dashes>/ch<centre>_<bw>mhz.yaml`. */
+/** One jump state of one receive chain, as a calibration holds it (see PhaseCalibration). */
+struct ChainStateCalibration
+{
+    unsigned antenna = 1;
+    uint8_t state = 0;
+    double delay_s = 0;         //!< measured delay relative to antenna 0 in this state
+    double deltaDelay_s = 0;    //!< relative to the antenna's reference state
+    double deltaPhase_rad = 0;  //!< relative to the antenna's reference state
+    uint64_t frames = 0;        //!< frames of the calibration drive in this state
+};
+
 struct PhaseCalibration
 {
-    static constexpr int kFormatVersion = 2;
+    static constexpr int kFormatVersion = 3;
     enum class Role : uint8_t
     {
         Receiver,    //!< the robot's receive array (rows: receive chains)
@@ -82,6 +115,15 @@ struct PhaseCalibration
     Role role = Role::Receiver;
     MacAddress transmitter;      //!< Role::Transmitter: the access point
     double aodResidual_rad = 0;  //!< Role::Transmitter: RMS AoD error after calibration
+    /** Receiver: the jump states the calibration knows (empty: state-unaware). */
+    std::vector<ChainStateCalibration> chainStates;
+    double chainStateTolerance_s = 1.0e-9;
+
+    /** The state entry of (antenna, state), or nullptr. */
+    const ChainStateCalibration* findChainState(unsigned antenna, uint8_t state) const;
+    /** The state of `antenna` whose delay is nearest to `delay_s` within the tolerance, or
+     *  nullptr. */
+    const ChainStateCalibration* matchChainState(unsigned antenna, double delay_s) const;
 
     size_t antennas() const { return phases_rad.size(); }
 

@@ -57,6 +57,12 @@ public:
     /** Jump state of chain `rx` at time t (0 for chain 0 and when jumps are disabled). */
     uint8_t jumpState(unsigned rx, double t_s) const;
     double jumpDelay_s(unsigned rx, double t_s) const;
+    /** Delay [s] and own constant phase [rad] (ImpairmentSpec::jumpStatePhase, else 0) of
+     *  chain `rx` in jump state `state`: the chain's CSI is multiplied by
+     *  e^{−j·2π·f_k·delay}·e^{j·phase}. */
+    double jumpStateDelay_s(uint8_t state) const { return state * spec_.jumpStep_s; }
+    double jumpStatePhase_rad(unsigned rx, uint8_t state) const;
+    const ImpairmentSpec& spec() const { return spec_; }
     const std::vector<JumpEvent>& jumpEvents(unsigned rx) const { return jumps_.at(rx); }
 
     bool isDeadCore(unsigned rx) const;

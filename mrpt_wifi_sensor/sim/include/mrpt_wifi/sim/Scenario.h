@@ -195,6 +195,9 @@ struct ImpairmentSpec
     unsigned jumpStates = 3;
     double jumpStep_s = 3e-9;
     double jumpRate_Hz = 0.2;
+    /** Each state of each chain also has its own constant phase (uniform, fixed per boot), as
+     *  real units report, on top of the phase its delay gives at the carrier. */
+    bool jumpStatePhase = false;
 
     std::vector<unsigned> deadCores;      //!< receive chains that report nothing useful
     bool deadCoresMissing = false;        //!< true: pairs absent; false: present but all zero

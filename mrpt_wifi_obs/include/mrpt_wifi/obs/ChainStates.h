@@ -1,0 +1,170 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt_wifi/obs/PhaseCalibration.h>
+
+#include <Eigen/Core>
+#include <complex>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+/** The receive chains' jump states.
+ *
+ * The BCM4366c0 (RT-AC86U) switches the delay between its receive chains among a few values
+ * (steps of about 3 ns; nexmon_csi issues #82, #219, #348, #393), each state with its own phase.
+ * A 3 ns step turns the phase across 80 MHz by ~1.5 rad from band edge to band edge, while a
+ * path's delay difference across a 7.8 cm array is below 0.26 ns: so each frame's inter-chain
+ * delay tells its state, and a calibration per state removes the jump. */
+namespace mrpt_wifi
+{
+class CObservationWiFiCSI;
+struct SubcarrierLayout;
+
+/** A chain whose state a frame could not tell (too little coherent energy). */
+constexpr uint8_t kUnknownChainState = 255;
+
+/** Per-frame delay of each receive chain relative to chain 0.
+ *  `delays_s[i]`: from the phase slope of Σ_m h_{m,i}(k)·h_{m,0}(k)^* across the subcarriers k
+ *  (common sampling-time offset and phase cancel; chain 0 is 0). `coherence[i]` ∈ [0, 1]: how
+ *  consistently neighbouring subcarriers agree on that slope (low: noise or a dead chain).
+ *  H rows are stream·nRx + rx, columns the subcarriers `k` (ascending). */
+void measureChainDelays(
+    const Eigen::Ref<const Eigen::MatrixXcf>& H, unsigned nRx, const std::vector<int>& k,
+    std::vector<double>& delays_s, std::vector<double>& coherence);
+
+/** The same on a raw observation: its complete streams on the layout's subcarriers (masked
+ *  bins left out). False if the frame has fewer than two chains or no complete stream. */
+bool measureChainDelays(
+    const CObservationWiFiCSI& obs, const SubcarrierLayout& layout, std::vector<double>& delays_s,
+    std::vector<double>& coherence);
+
+/** Where a state's correction comes from. */
+enum class ChainStateOrigin : uint8_t
+{
+    Calibration,   //!< the calibration file lists it
+    Assumed,       //!< a state-unaware calibration: the first state seen is taken as its own
+    LearntOnline,  //!< its phase was learnt from the other chains while running
+    Unresolved,    //!< not in the calibration, phase not learnt yet: no bearing from it
+    Uncalibrated   //!< there is no calibration: the state is only reported
+};
+const char* toString(ChainStateOrigin o);
+
+/** One jump state of one chain, as the tracker knows it. */
+struct ChainStateInfo
+{
+    uint8_t id = 0;
+    double delay_s = 0;         //!< centre of the measured delays relative to chain 0
+    double deltaDelay_s = 0;    //!< relative to the chain's reference state
+    double deltaPhase_rad = 0;  //!< relative to the chain's reference state
+    uint64_t frames = 0;        //!< frames classified into it while running
+    ChainStateOrigin origin = ChainStateOrigin::Uncalibrated;
+    /** Whether a frame in it can be corrected (reference, calibrated or learnt). */
+    bool resolved() const
+    {
+        return origin == ChainStateOrigin::Calibration || origin == ChainStateOrigin::Assumed ||
+               origin == ChainStateOrigin::LearntOnline;
+    }
+
+    // Online learning of an Unresolved state: Σ of per-frame phase evidence and its |·|.
+    std::complex<double> evidence{0, 0};
+    double evidenceMagnitude = 0;
+    size_t evidenceFrames = 0;
+    double delaySum_s = 0;  //!< running centre of states found while running
+};
+
+/** How frames are classified. One frame's inter-chain delay is a noisy witness of its state:
+ *  multipath moves it by ~0.7 ns (median) and, in one frame of ten, by 3 ns or more (random
+ *  rooms, 80 MHz). The states persist for seconds, so each chain runs a hidden-Markov forward
+ *  filter over its states with a heavy-tailed likelihood, and a frame gets a state only when
+ *  the filter is confident; otherwise it is "unknown" (no bearing from it when a state-aware
+ *  calibration is in use). */
+struct ChainStateOptions
+{
+    /** A delay farther than this from every known state counts towards a new state (the jumps
+     *  are ~3 ns apart); also the matching tolerance of calibration files made with it. */
+    double tolerance_s = 1.5e-9;
+    double measurementSigma_s = 0.7e-9;  //!< Cauchy scale of the per-frame likelihood
+    double outlierShare = 0.1;           //!< its uniform floor (over ±30 ns)
+    double switchProbability = 1e-4;     //!< per frame, of leaving the current state
+    double confidence = 0.99;            //!< posterior a frame needs to get a state
+    /** A new state is found when `discoveryVotes` of the last `discoveryFrames` frames lie far
+     *  from every known state and agree among themselves within the tolerance. */
+    size_t discoveryFrames = 24, discoveryVotes = 20;
+    /** A chain whose delay is measured with less coherence than this gives no evidence in that
+     *  frame. */
+    double minCoherence = 0.2;
+    /** Online learning: frames of evidence, and the coherence of their phases, before an
+     *  Unresolved state is taken as learnt. */
+    size_t learnFrames = 30;
+    double learnCoherence = 0.7;
+};
+
+/** The jump states of one receiver on one channel: classifies each frame's chain delays, counts
+ *  state changes, holds each state's correction (from a calibration, or learnt while running),
+ *  and collects notices for the user. Deterministic: the same frames in the same order give the
+ *  same states live and offline. Not thread-safe. */
+class ChainStateTracker
+{
+public:
+    ChainStateTracker() = default;
+    /** nRx chains; `cal` (may be null) seeds the states it knows. */
+    ChainStateTracker(unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o = {});
+
+    unsigned chains() const { return unsigned(states_.size()); }
+    const ChainStateOptions& options() const { return opts_; }
+    /** A calibration is in use. */
+    bool calibrated() const { return calibrated_; }
+    /** The calibration knows its states: corrections are applied, and frames whose state is
+     *  unknown or unresolved give no bearing. Otherwise states are only reported. */
+    bool applies() const { return calibrated_ && stateAware_; }
+
+    /** The state id of every chain for one frame's measured delays (chain 0: 0). A chain
+     *  measured with too little coherence gets kUnknownChainState; a delay that fits no known
+     *  state starts a new one (Unresolved with a calibration, Uncalibrated without). */
+    void classify(
+        const std::vector<double>& delays_s, const std::vector<double>& coherence,
+        std::vector<uint8_t>& ids);
+
+    const ChainStateInfo& info(unsigned chain, uint8_t id) const;
+    const std::vector<ChainStateInfo>& states(unsigned chain) const { return states_.at(chain); }
+    /** State changes seen on a chain (a frame in another state than the chain's previous one). */
+    uint64_t changes(unsigned chain) const { return changes_.at(chain); }
+    uint64_t totalChanges() const;
+
+    /** Adds one frame's evidence for the phase of an Unresolved state: z = Σ over streams and
+     *  subcarriers of (chain's calibrated CSI)·conj(the other chains' steered sum). When enough
+     *  frames agree the state becomes LearntOnline with deltaPhase = −arg(Σ z) relative to its
+     *  current correction. Returns true when this frame completed the learning. */
+    bool addLearningEvidence(unsigned chain, uint8_t id, std::complex<double> z);
+
+    /** Messages for the user (a state the calibration lacks, a state learnt), taken once. */
+    std::vector<std::string> takeNotices();
+    /** One line per chain: its states (delay, frames, origin) and changes. */
+    std::string summary() const;
+
+private:
+    ChainStateInfo& newState(unsigned chain, double delay_s, ChainStateOrigin origin);
+    const ChainStateInfo* reference(unsigned chain) const;
+    /** One chain's forward-filter step; returns its state id or kUnknownChainState. */
+    uint8_t classifyChain(unsigned chain, double delay_s, bool valid);
+
+    struct ChainFilter
+    {
+        std::vector<double> belief;  //!< parallel to states_[chain]
+        std::vector<double> recent;  //!< last delays far from every state (ring)
+        std::vector<uint8_t> recentFar;
+        size_t head = 0;
+    };
+    std::vector<ChainFilter> filters_;
+
+    ChainStateOptions opts_;
+    bool calibrated_ = false, stateAware_ = false;
+    std::string calibrationName_;
+    std::vector<std::vector<ChainStateInfo>> states_;  //!< [chain]
+    std::vector<uint8_t> last_;                        //!< previous state per chain
+    std::vector<uint64_t> changes_;
+    std::vector<std::string> notices_;
+};
+
+}  // namespace mrpt_wifi
