@@ -24,6 +24,7 @@ PreprocessOptions calibrationPreprocessOptions()
     o.removeSamplingTimeOffset = true;  // common to antennas: harmless, and keeps pools tidy
     o.normalizePower = true;            // every frame weighs the same in the covariances
     o.requireCalibration = false;
+    o.trackChainStates = true;  // frames are grouped by the receive chains' jump states
     return o;
 }
 
@@ -183,13 +184,19 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     Channel& ch = channels_[key(f.chanspec)];
     const unsigned n = f.nRx;
     const size_t nSub = f.layout->size();
-    // A frame whose chain state could not be measured can't be grouped: leave it out.
-    if (std::find(f.chainState.begin(), f.chainState.end(), kUnknownChainState) !=
-        f.chainState.end())
-    {
-        ++ch.unknownStateFrames;
-        return;
-    }
+    // A chain whose state this frame could not tell stays in its last known state (the states
+    // last seconds); before any is known the frame can't be grouped and is left out.
+    std::vector<uint8_t> chainState = f.chainState;
+    for (size_t i = 0; i < chainState.size(); ++i)
+        if (chainState[i] == kUnknownChainState)
+        {
+            if (i >= ch.lastStates.size() || ch.lastStates[i] == kUnknownChainState)
+            {
+                ++ch.unknownStateFrames;
+                return;
+            }
+            chainState[i] = ch.lastStates[i];
+        }
     if (!ch.layout)
     {
         ch.layout = f.layout;
@@ -209,12 +216,12 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     const auto open = ch.openSegment.find(f.transmitter);
     if (open == ch.openSegment.end() || f.time_s - ch.segments[open->second].t0 > opts_.segment_s ||
         f.time_s < ch.segments[open->second].t0 ||
-        ch.segments[open->second].chainState != f.chainState)
+        ch.segments[open->second].chainState != chainState)
     {
         Segment s;
         s.t0 = f.time_s;
         s.transmitter = f.transmitter;
-        s.chainState = f.chainState;
+        s.chainState = chainState;
         s.R.assign(nSub, Eigen::MatrixXcd::Zero(n, n));
         ch.segments.push_back(std::move(s));
         ch.openSegment[f.transmitter] = ch.segments.size() - 1;
@@ -256,14 +263,14 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     ++seg.frames;
     ++ch.frames;
     ch.tLast = f.time_s;
-    for (unsigned i = 1; i < f.chainState.size() && i < f.chainDelay_s.size(); ++i)
+    for (unsigned i = 1; i < chainState.size() && i < f.chainDelay_s.size(); ++i)
     {
-        auto& st = ch.states[{i, f.chainState[i]}];
+        auto& st = ch.states[{i, chainState[i]}];
         ++st.frames;
         st.delaySum_s += f.chainDelay_s[i];
     }
-    if (!ch.lastStates.empty() && ch.lastStates != f.chainState) ++ch.stateChanges;
-    ch.lastStates = f.chainState;
+    if (!ch.lastStates.empty() && ch.lastStates != chainState) ++ch.stateChanges;
+    ch.lastStates = chainState;
     if (f.hasGeometry)
     {
         ch.foldedAoa.push_back(float(foldBearing(array_, f.expectedAoa_rad)));
@@ -385,6 +392,11 @@ std::string fmt(double v, int prec = 1)
 }
 }  // namespace
 
+size_t PhaseCalibrator::minStateFrames(size_t frames) const
+{
+    return std::max<size_t>(opts_.minStateFrames, size_t(opts_.minStateShare * double(frames)));
+}
+
 ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
 {
     const auto it = channels_.find(key(cs));
@@ -425,6 +437,7 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
     };
     for (const auto& [key, st] : ch.states)
     {
+        if (st.frames < minStateFrames(ch.frames)) continue;
         ChainStateDiagnostics sd;
         sd.antenna = key.first;
         sd.state = key.second;
@@ -446,7 +459,16 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
         }
         states[key] = sd;
     }
-    std::vector<Segment> segments = ch.segments;
+    std::vector<Segment> segments;
+    for (const auto& s : ch.segments)
+    {
+        // A state seen in a handful of frames is more likely a misread than a state: its
+        // frames are left out rather than calibrated on their own.
+        bool known = true;
+        for (unsigned i = 1; i < s.chainState.size(); ++i)
+            known = known && states.count({i, s.chainState[i]});
+        if (known) segments.push_back(s);
+    }
     if (!states.empty())
         for (auto& s : segments)
         {

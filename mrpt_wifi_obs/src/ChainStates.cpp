@@ -260,6 +260,11 @@ uint8_t ChainStateTracker::classifyChain(unsigned i, double d, bool valid)
     }
     if (b[best] < opts_.confidence) return kUnknownChainState;
     ChainStateInfo& st = list[best];
+    // The filter lags a switch by a few frames: a frame whose own delay disagrees with the
+    // state it is given is not trusted with it.
+    // (Only on a chain known to jump: with one state there is nothing to confuse it with.)
+    if (n > 1 && valid && std::abs(d - st.delay_s) > opts_.frameTolerance_s)
+        return kUnknownChainState;
     ++st.frames;
     // States found while running follow their frames; calibrated ones stay as measured.
     if (st.origin != ChainStateOrigin::Calibration && valid &&

@@ -112,6 +112,10 @@ struct CalibratorOptions
     /** Drive mode: warn when the calibration leaves this 90th-percentile bearing error on the
      *  drive's own frames (it does not explain the drive). */
     double maxP90Error_deg = 20;
+    /** A jump state needs at least this many frames (and this share of the drive) to be
+     *  calibrated; frames in rarer states are left out. */
+    size_t minStateFrames = 50;
+    double minStateShare = 0.02;
 };
 
 /** One jump state of one chain as the calibration drive saw it. */
@@ -219,6 +223,7 @@ private:
         uint64_t stateChanges = 0;
         std::vector<uint8_t> lastStates;
     };
+    size_t minStateFrames(size_t frames) const;
     static uint32_t key(const Chanspec& cs)
     {
         return (uint32_t(cs.centerChannel) << 16) | cs.bandwidthMHz;

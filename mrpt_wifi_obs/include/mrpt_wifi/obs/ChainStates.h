@@ -88,6 +88,8 @@ struct ChainStateOptions
     double outlierShare = 0.1;           //!< its uniform floor (over ±30 ns)
     double switchProbability = 1e-4;     //!< per frame, of leaving the current state
     double confidence = 0.99;            //!< posterior a frame needs to get a state
+    /** ... and its own delay within this of that state's (else it is "unknown"). */
+    double frameTolerance_s = 2.0e-9;
     /** A new state is found when `discoveryVotes` of the last `discoveryFrames` frames lie far
      *  from every known state and agree among themselves within the tolerance. */
     size_t discoveryFrames = 24, discoveryVotes = 20;

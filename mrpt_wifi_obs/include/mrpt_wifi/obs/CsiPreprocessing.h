@@ -71,11 +71,9 @@ struct PreprocessOptions
     /** Measure each frame's inter-chain delays and classify the receive chains' jump states
      *  (ChainStates.h); with a calibration, correct each chain for its state before the
      *  calibration, and give no bearing from a frame with a chain in a state the calibration
-     *  lacks until its phase is learnt from the other chains.
-     *  Off by default: one frame's delay is a noisy witness in multipath (issue 21 is open; see
-     *  ChainStateOptions for the figures), so the per-frame classification still misassigns a
-     *  few per cent of frames on the simulator's random rooms. */
-    bool trackChainStates = false;
+     *  lacks until its phase is learnt from the other chains. With a calibration that holds no
+     *  states (version ≤ 2) or none at all, states are only reported, never applied. */
+    bool trackChainStates = true;
     ChainStateOptions chainStates;
 };
 
