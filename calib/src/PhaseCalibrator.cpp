@@ -475,8 +475,8 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
             // R'(a, b) = d_a·R(a, b)·conj(d_b), d_i = e^{j(2π·k·Δf·Δd_i − Δψ_i)}.
             std::vector<double> dd(n, 0.0), dp(n, 0.0);
             for (unsigned i = 1; i < n && i < s.chainState.size(); ++i)
-                if (const auto it = states.find({i, s.chainState[i]}); it != states.end())
-                    dd[i] = it->second.deltaDelay_s, dp[i] = it->second.deltaPhase_rad;
+                if (const auto st = states.find({i, s.chainState[i]}); st != states.end())
+                    dd[i] = st->second.deltaDelay_s, dp[i] = st->second.deltaPhase_rad;
             for (size_t j = 0; j < nSub; ++j)
             {
                 Eigen::VectorXcd dj(n);

@@ -7,6 +7,7 @@
 #include <mrpt/opengl/stock_objects.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <fstream>
@@ -202,7 +203,8 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
         case 0:
         {
             std::string yaml;
-            in >> yaml;
+            // A map of thousands of transmitters is well below 64 MB of YAML.
+            readBoundedString(in, yaml, 64u << 20, "CWiFiBearingMap");
             transmitters_ = TransmitterMap::fromYamlText(yaml, "<serialized CWiFiBearingMap>");
             auto& m = likelihoodOptions.model;
             in >> m.outlierProb >> m.minStd_rad >> m.stdScale >> m.maxStd_rad >>

@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <cmath>
@@ -49,7 +50,10 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
     {
         case 0:
         {
-            in >> timestamp >> sensorLabel >> sensorPose;
+            constexpr const char* kWhat = "CObservationWiFiBearing";
+            in >> timestamp;
+            readBoundedString(in, sensorLabel, kMaxStoredStringLength, kWhat);
+            in >> sensorPose;
             in.ReadBuffer(transmitter.bytes.data(), transmitter.bytes.size());
             uint16_t raw = 0;
             in >> raw;
@@ -58,7 +62,9 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
                 THROW_EXCEPTION_FMT(
                     "CObservationWiFiBearing: stored chanspec 0x%04x is invalid", raw);
             chanspec = *cs;
-            in >> rssi_dBm >> algorithm >> framesUsed >> pathsDetected;
+            in >> rssi_dBm;
+            readBoundedString(in, algorithm, kMaxStoredStringLength, kWhat);
+            in >> framesUsed >> pathsDetected;
             in >> aoa_rad >> aoaStd_rad >> aoaAmbiguous >> aoaMirror_rad;
             in >> hasAod >> aod_rad >> aodStd_rad >> aodAmbiguous >> aodMirror_rad;
             in >> hasDelay >> delay_s >> quality;

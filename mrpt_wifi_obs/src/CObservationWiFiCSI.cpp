@@ -1,7 +1,9 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/datetime.h>
+#include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/ChainStates.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 
 #include <cmath>
@@ -85,10 +87,11 @@ std::vector<double> CObservationWiFiCSI::dataSubcarrierFrequencies() const
 
 // ---------------------------------------------------------------- serialization
 // Version 0: the BCM4366c0 fields. Version 1 (issue 13): + source, subcarrierIndices,
-// antennaRssi_dB, noiseFloor_dBm, agc_dB, scaledCsiFactor.
+// antennaRssi_dB, noiseFloor_dBm, agc_dB, scaledCsiFactor. Version 2 (issue 21): + chainDelay_ns,
+// chainState.
 uint8_t CObservationWiFiCSI::serializeGetVersion() const
 {
-    return 1;
+    return 2;
 }
 
 void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
@@ -104,6 +107,8 @@ void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
     // version 1
     out << source << subcarrierIndices << antennaRssi_dB << noiseFloor_dBm << agc_dB
         << scaledCsiFactor;
+    // version 2
+    out << chainDelay_ns << chainState;
 }
 
 void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -112,13 +117,21 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
     {
         case 0:
         case 1:
+        case 2:
         {
-            in >> timestamp >> sensorLabel >> sensorPose;
+            // Strings and vectors are read with a bound: a damaged length must not ask for
+            // gigabytes (MRPT's own readers allocate whatever the file claims).
+            constexpr const char* kWhat = "CObservationWiFiCSI";
+            in >> timestamp;
+            readBoundedString(in, sensorLabel, kMaxStoredStringLength, kWhat);
+            in >> sensorPose;
             in.ReadBuffer(transmitter.bytes.data(), transmitter.bytes.size());
             uint16_t rawChanspec = 0;
             uint8_t variant = 0;
             in >> rssi_dBm >> sequenceNumber >> fragmentNumber >> frameControl >> rawChanspec >>
-                chipId >> firmwareCounter >> variant >> routerAddress >> nRx >> nTx >> presentMask;
+                chipId >> firmwareCounter >> variant;
+            readBoundedString(in, routerAddress, kMaxStoredStringLength, kWhat);
+            in >> nRx >> nTx >> presentMask;
             const auto cs = Chanspec::decode(rawChanspec);
             if (!cs)
                 THROW_EXCEPTION_FMT(
@@ -127,7 +140,7 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
             if (variant > uint8_t(NexmonHeaderVariant::UbiLocate))
                 THROW_EXCEPTION_FMT("CObservationWiFiCSI: unknown header variant %u", variant);
             headerVariant = NexmonHeaderVariant(variant);
-            in >> maskedBins;
+            readBoundedVector(in, maskedBins, chanspec.nfft(), kWhat);
             const uint32_t n = in.ReadAs<uint32_t>();
             if (nRx > kMaxChains || nTx > kMaxChains || n != size_t(nRx) * nTx * chanspec.nfft())
                 THROW_EXCEPTION_FMT(
@@ -137,8 +150,10 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
             in.ReadBufferFixEndianness(reinterpret_cast<float*>(csi.data()), size_t(n) * 2);
             if (version >= 1)
             {
-                in >> source >> subcarrierIndices >> antennaRssi_dB >> noiseFloor_dBm >> agc_dB >>
-                    scaledCsiFactor;
+                readBoundedString(in, source, kMaxStoredStringLength, kWhat);
+                readBoundedVector(in, subcarrierIndices, chanspec.nfft(), kWhat);
+                readBoundedVector(in, antennaRssi_dB, kMaxChains, kWhat);
+                in >> noiseFloor_dBm >> agc_dB >> scaledCsiFactor;
                 const int half = int(chanspec.nfft() / 2);
                 for (auto k : subcarrierIndices)
                     if (k < -half || k >= half)
@@ -154,6 +169,13 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
                 antennaRssi_dB.clear();
                 noiseFloor_dBm = agc_dB = std::numeric_limits<float>::quiet_NaN();
                 scaledCsiFactor = 0.0;
+            }
+            chainDelay_ns.clear();
+            chainState.clear();
+            if (version >= 2)
+            {
+                readBoundedVector(in, chainDelay_ns, kMaxChains, kWhat);
+                readBoundedVector(in, chainState, kMaxChains, kWhat);
             }
         }
         break;
@@ -243,6 +265,26 @@ void CObservationWiFiCSI::getDescriptionAsText(std::ostream& o) const
         o << "  Masked bins (k)      :";
         for (auto b : maskedBins) o << " " << binToSubcarrier(b, nfft());
         o << "\n";
+    }
+    if (!chainDelay_ns.empty() || !chainState.empty())
+    {
+        // The BCM4366c0's inter-chain delay jumps among a few states (steps of ~3 ns).
+        o << "  Receive chain states : ";
+        for (size_t rx = 1; rx < std::max(chainDelay_ns.size(), chainState.size()); ++rx)
+        {
+            o << (rx > 1 ? ", " : "") << "chain " << rx << " ";
+            if (rx < chainState.size())
+            {
+                if (chainState[rx] == kUnknownChainState)
+                    o << "state ?";
+                else
+                    o << "state " << int(chainState[rx]);
+            }
+            if (rx < chainDelay_ns.size() && std::isfinite(chainDelay_ns[rx]))
+                o << " (" << std::showpos << std::fixed << std::setprecision(2)
+                  << chainDelay_ns[rx] << std::noshowpos << " ns)";
+        }
+        o << "  [delay relative to chain 0; ? = could not tell]\n";
     }
     o << "  Per pair (data subcarriers): mean |H| [dB], phase slope [rad/subcarrier] (delay "
          "[ns])\n";

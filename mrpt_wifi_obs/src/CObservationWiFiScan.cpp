@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiScan.h>
 
 #include <iomanip>
@@ -41,7 +42,11 @@ void CObservationWiFiScan::serializeFrom(mrpt::serialization::CArchive& in, uint
     {
         case 0:
         {
-            in >> timestamp >> sensorLabel >> sensorPose >> scanner;
+            constexpr const char* kWhat = "CObservationWiFiScan";
+            in >> timestamp;
+            readBoundedString(in, sensorLabel, kMaxStoredStringLength, kWhat);
+            in >> sensorPose;
+            readBoundedString(in, scanner, kMaxStoredStringLength, kWhat);
             const auto n = in.ReadAs<uint32_t>();
             accessPoints.clear();
             accessPoints.reserve(std::min<uint32_t>(n, 4096));
@@ -50,7 +55,8 @@ void CObservationWiFiScan::serializeFrom(mrpt::serialization::CArchive& in, uint
                 ScannedAccessPoint ap;
                 in.ReadBuffer(ap.bssid.bytes.data(), ap.bssid.bytes.size());
                 uint16_t raw = 0;
-                in >> ap.ssid >> raw;
+                readBoundedString(in, ap.ssid, kMaxStoredStringLength, kWhat);
+                in >> raw;
                 const auto cs = Chanspec::decode(raw);
                 if (!cs)
                     THROW_EXCEPTION_FMT(

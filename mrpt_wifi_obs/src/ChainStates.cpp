@@ -106,7 +106,7 @@ std::string ns(double s)
 }  // namespace
 
 ChainStateTracker::ChainStateTracker(unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o)
-    : opts_(o), states_(nRx), last_(nRx, kUnknownChainState), changes_(nRx, 0), filters_(nRx)
+    : filters_(nRx), opts_(o), states_(nRx), last_(nRx, kUnknownChainState), changes_(nRx, 0)
 {
     calibrated_ = cal != nullptr;
     if (!cal) return;

@@ -2,9 +2,12 @@
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/ChainStates.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 using namespace mrpt_wifi;
@@ -38,7 +41,32 @@ CObservationWiFiCSI::Ptr makeFilledObservation()
                     float(tx + 1) * std::cos(0.05f * b + rx), -std::sin(0.03f * b) * 0.5f};
         }
     o->maskedBins = {128, 129};
+    o->chainDelay_ns = {0.0f, 3.02f, std::nanf(""), -2.9f};
+    o->chainState = {0, 1, kUnknownChainState, 2};
     return o;
+}
+
+std::vector<uint8_t> serialized(const CObservationWiFiCSI& o)
+{
+    mrpt::io::CMemoryStream buf;
+    auto out = mrpt::serialization::archiveFrom(buf);
+    out << o;
+    const auto* p = static_cast<const uint8_t*>(buf.getRawBufferData());
+    return {p, p + buf.getTotalBytesCount()};
+}
+
+mrpt::serialization::CSerializable::Ptr deserialized(const std::vector<uint8_t>& bytes)
+{
+    mrpt::io::CMemoryStream buf;
+    buf.assignMemoryNotOwn(bytes.data(), bytes.size());
+    auto in = mrpt::serialization::archiveFrom(buf);
+    return in.ReadObject();
+}
+
+size_t find(const std::vector<uint8_t>& bytes, const std::string& what)
+{
+    const auto it = std::search(bytes.begin(), bytes.end(), what.begin(), what.end());
+    return it == bytes.end() ? std::string::npos : size_t(it - bytes.begin());
 }
 }  // namespace
 
@@ -75,6 +103,63 @@ TEST(CObservationWiFiCSI, SerializationRoundTripKeepsEveryField)
     EXPECT_FALSE(b->isPresent(1, 2));
     EXPECT_EQ(b->maskedBins, a->maskedBins);
     EXPECT_EQ(b->csi, a->csi);
+    ASSERT_EQ(b->chainDelay_ns.size(), 4u);
+    EXPECT_FLOAT_EQ(b->chainDelay_ns[1], 3.02f);
+    EXPECT_TRUE(std::isnan(b->chainDelay_ns[2]));
+    EXPECT_EQ(b->chainState, a->chainState);
+}
+
+TEST(CObservationWiFiCSI, Version1RawlogsStillLoadWithoutChainStates)
+{
+    // A version-1 object is a version-2 one without the two chain-state vectors (two empty
+    // vectors: 8 bytes of counts before MRPT's end marker) and with version byte 1.
+    auto a = makeFilledObservation();
+    a->chainDelay_ns.clear();
+    a->chainState.clear();
+    auto bytes = serialized(*a);
+    const std::string name = "CObservationWiFiCSI";
+    const size_t at = find(bytes, name);
+    ASSERT_NE(at, std::string::npos);
+    uint8_t& version = bytes[at + name.size()];
+    ASSERT_EQ(version, 2);
+    version = 1;
+    ASSERT_GE(bytes.size(), 9u);
+    const auto end = bytes.end() - 1;  // MRPT's end-of-object marker
+    ASSERT_TRUE(std::all_of(end - 8, end, [](uint8_t c) { return c == 0; }));
+    bytes.erase(end - 8, end);
+
+    const auto b = std::dynamic_pointer_cast<CObservationWiFiCSI>(deserialized(bytes));
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->csi, a->csi);
+    EXPECT_TRUE(b->chainDelay_ns.empty());
+    EXPECT_TRUE(b->chainState.empty());
+}
+
+TEST(CObservationWiFiCSI, DamagedLengthIsAnErrorNotAHugeAllocation)
+{
+    // A fuzzer found this: a rawlog whose label length reads 0xfffffff0 made MRPT's string
+    // reader ask for 4 GB. The bounded reader refuses it and names the field's owner.
+    const auto a = makeFilledObservation();
+    for (const std::string& field : {a->sensorLabel, a->routerAddress})
+    {
+        auto bytes = serialized(*a);
+        const size_t at = find(bytes, field);
+        ASSERT_NE(at, std::string::npos);
+        ASSERT_GE(at, 4u);
+        const uint32_t huge = 0xfffffff0u;
+        std::memcpy(&bytes[at - 4], &huge, 4);
+        try
+        {
+            deserialized(bytes);
+            ADD_FAILURE() << "a damaged length of " << field << " was accepted";
+        }
+        catch (const std::exception& e)
+        {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find("CObservationWiFiCSI"), std::string::npos) << msg;
+            EXPECT_NE(msg.find("exceeds the limit"), std::string::npos) << msg;
+        }
+    }
 }
 
 TEST(CObservationWiFiCSI, CorruptStoredShapeIsAnError)
@@ -109,7 +194,8 @@ TEST(CObservationWiFiCSI, DescriptionNamesWhatAPersonNeeds)
     const std::string d = s.str();
     for (const char* expected :
          {"00:12:34:56:78:9b", "-57 dBm", "channel 155 / 80 MHz", "5775.0 MHz", "0x006a / nexmon",
-          "2 tx x 4 rx x 256 bins", "7/8 pairs present", "tx 1 rx 2: MISSING", "tx 0 rx 0:"})
+          "2 tx x 4 rx x 256 bins", "7/8 pairs present", "tx 1 rx 2: MISSING", "tx 0 rx 0:",
+          "chain 1 state 1 (+3.02 ns)", "chain 2 state ?", "chain 3 state 2 (-2.90 ns)"})
         EXPECT_NE(d.find(expected), std::string::npos) << "missing '" << expected << "' in\n" << d;
 }
 

@@ -38,7 +38,8 @@ const char* toString(NexmonHeaderVariant v);
  * csi.
  *
  * Serialization version 1 adds the source fields below; version 0 rawlogs (all from the
- * BCM4366c0) still load, with source = "bcm4366c0".
+ * BCM4366c0) still load, with source = "bcm4366c0". Version 2 adds the receive chains' jump
+ * states (chainDelay_ns, chainState); older rawlogs load with both empty.
  */
 class CObservationWiFiCSI : public mrpt::obs::CObservation
 {
@@ -86,6 +87,13 @@ public:
     /** Source-defined scaling of the raw CSI to physical units (scaledCsi() = factor · csi);
      *  0 when the format defines none. */
     double scaledCsiFactor = 0.0;
+    /** Per receive chain, its delay relative to chain 0 [ns] measured on this frame (chain 0:
+     *  0; NaN where too noisy to tell); empty when not measured. */
+    std::vector<float> chainDelay_ns;
+    /** Per receive chain, the jump state the recorder classified this frame into (ids as in
+     *  the recorder's summary and, with a state-aware calibration, the calibration file's);
+     *  kUnknownChainState (255) where it could not tell; empty when not classified. */
+    std::vector<uint8_t> chainState;
     /** @} */
 
     /** Sets the shape and zero-fills the CSI; clears presentMask. */
