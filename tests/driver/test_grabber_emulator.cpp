@@ -84,19 +84,19 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
         ++perTx[f->transmitter.asString()];
         EXPECT_EQ(f->nTx, 4);
     }
-    const size_t allowance =
-        test::lastReportedKernelDrops(rec.log) + cmp.sentUpToLastRecorded / 100;
-    EXPECT_LE(cmp.missing + incomplete, allowance)
-        << rec.frames.size() << " frames recorded, " << cmp.missing << " of the "
-        << cmp.sentUpToLastRecorded << " sent up to the last recorded one missing, " << incomplete
-        << " incomplete";
+    // The receiver listened before the router was configured: the first frames sent count too.
+    const size_t missing = cmp.firstRecorded + cmp.missing;
+    const size_t sentUpToLast = cmp.firstRecorded + cmp.sentInSpan;
+    const size_t allowance = test::lastReportedKernelDrops(rec.log) + sentUpToLast / 100;
+    EXPECT_LE(missing + incomplete, allowance)
+        << rec.frames.size() << " frames recorded, " << missing << " of the " << sentUpToLast
+        << " sent up to the last recorded one missing, " << incomplete << " incomplete";
     EXPECT_EQ(perTx.size(), 4u);
     // The pose from the .ini (pose_x = 0.10, pose_z = 0.40).
     EXPECT_NEAR(rec.frames.front()->sensorPose.x(), 0.10, 1e-9);
     EXPECT_NEAR(rec.frames.front()->sensorPose.z(), 0.40, 1e-9);
-    std::cout << rec.frames.size() << " frames recorded of " << sent.size() << " sent ("
-              << cmp.missing << " missing up to the last recorded, " << incomplete
-              << " incomplete)\n";
+    std::cout << rec.frames.size() << " frames recorded of " << sent.size() << " sent (" << missing
+              << " missing up to the last recorded, " << incomplete << " incomplete)\n";
 }
 
 TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
@@ -105,7 +105,8 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
     const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
     test::EmulatorProcess emu(
         {"--scenario", scenario("kidnapped"), "--seed", "5", "--loss", "0.02", "--corrupt", "0.02",
-         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80"},
+         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80", "--record-sent",
+         tmp.file("sent.pcap"), "--max-datagrams", "40000"},
         port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     // No router control here: a receiver that only listens (preconfigured router).
@@ -119,8 +120,19 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
          {"rawlog_prefix", "lossy"}},
         tmp.file("grab.ini"));
     const auto rec = test::runGrabber(tmp, ini, 4.0);
+    emu.stop();  // closes the record of what was sent
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
-    ASSERT_GT(rec.frames.size(), 800u);
+    // Capture goes on through the faults: of the frames the emulator sent (after its faults)
+    // while the grabber recorded, at most 2 % are missing (a frame is lost only when all its
+    // datagrams are; the rest is the kernel's socket buffer on a busy machine, as reported).
+    ASSERT_FALSE(rec.frames.empty()) << rec.log;
+    const auto cmp =
+        test::compareWithSent(rec.frames, test::decodeSentFrames(tmp.file("sent.pcap"), port));
+    EXPECT_LE(cmp.missing, test::lastReportedKernelDrops(rec.log) + cmp.sentInSpan / 50)
+        << cmp.missing << " of " << cmp.sentInSpan << " sent frames not recorded";
+    std::cout << rec.frames.size() << " frames recorded, " << cmp.missing << " of "
+              << cmp.sentInSpan << " sent in their span missing, " << cmp.neverSent
+              << " never sent\n";
     size_t incomplete = 0;
     for (const auto& f : rec.frames) incomplete += !f->isComplete();
     // 2% datagram loss on 16-datagram frames: ~28% of frames miss a pair; corruption adds more.

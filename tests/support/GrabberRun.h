@@ -136,9 +136,10 @@ inline size_t lastReportedKernelDrops(const std::string& log)
  *  missing, not how many frames that was. */
 struct SentVsRecorded
 {
-    size_t sentUpToLastRecorded = 0;  //!< sent frames up to the latest-sent recorded one
-    size_t missing = 0;               //!< of those, not recorded
-    size_t neverSent = 0;             //!< recorded frames matching no sent frame (must be 0)
+    size_t firstRecorded = 0;  //!< index among the sent frames of the earliest-sent recorded one
+    size_t sentInSpan = 0;     //!< sent frames from the earliest-sent to the latest-sent recorded
+    size_t missing = 0;        //!< of those, not recorded
+    size_t neverSent = 0;      //!< recorded frames matching no sent frame
 };
 inline SentVsRecorded compareWithSent(
     const std::vector<CObservationWiFiCSI::Ptr>& recorded,
@@ -150,7 +151,7 @@ inline SentVsRecorded compareWithSent(
     for (size_t i = sent.size(); i-- > 0;)
         sentAt[{sent[i]->transmitter.asString(), sent[i]->sequenceNumber}].push_back(i);
     SentVsRecorded c;
-    size_t matched = 0;
+    size_t matched = 0, first = sent.size(), last = 0;
     for (const auto& f : recorded)
     {
         auto it = sentAt.find({f->transmitter.asString(), f->sequenceNumber});
@@ -159,11 +160,15 @@ inline SentVsRecorded compareWithSent(
             ++c.neverSent;
             continue;
         }
-        c.sentUpToLastRecorded = std::max(c.sentUpToLastRecorded, it->second.back() + 1);
+        first = std::min(first, it->second.back());
+        last = std::max(last, it->second.back());
         it->second.pop_back();
         ++matched;
     }
-    c.missing = c.sentUpToLastRecorded - matched;
+    if (matched == 0) return c;
+    c.firstRecorded = first;
+    c.sentInSpan = last - first + 1;
+    c.missing = c.sentInSpan - matched;
     return c;
 }
 
