@@ -250,6 +250,15 @@ World driftingFiveLaps(uint64_t seed)
     o.seed = seed;
     return makeWorld(aps, o);
 }
+
+/** The world's odometry and bearings, APs unknown. */
+GraphSlamInput unknownApsInput(const World& w)
+{
+    GraphSlamInput in;
+    in.odometry = w.odometry;
+    in.bearings = w.bearings;
+    return in;
+}
 }  // namespace
 
 TEST(GraphSlamUnknownAps, SurvivesStrongHeadingDriftOverFiveLaps)
@@ -260,10 +269,7 @@ TEST(GraphSlamUnknownAps, SurvivesStrongHeadingDriftOverFiveLaps)
     for (const uint64_t seed : {1, 2, 3})
     {
         const World w = driftingFiveLaps(seed);
-        GraphSlamInput in;
-        in.odometry = w.odometry;
-        in.bearings = w.bearings;
-        const auto r = solveBearingGraph(in, GraphSlamOptions());
+        const auto r = solveBearingGraph(unknownApsInput(w), GraphSlamOptions());
         const auto ate = absoluteTrajectoryError(r.poses, w.truth);
         const auto odo = absoluteTrajectoryError(r.initialPoses, w.truth);
         const double reduction = 1 - ate.stats.median / odo.stats.median;
@@ -279,13 +285,10 @@ TEST(GraphSlamUnknownAps, SurvivesStrongHeadingDriftOverFiveLaps)
 TEST(GraphSlamUnknownAps, ReportsWhenCeresDidNotConverge)
 {
     const World w = driftingFiveLaps(1);
-    GraphSlamInput in;
-    in.odometry = w.odometry;
-    in.bearings = w.bearings;
     GraphSlamOptions o;
     o.maxIterations = 1;
     o.growthWindow_s = 0;  // one start, one Ceres iteration: cannot converge
-    const auto r = solveBearingGraph(in, o);
+    const auto r = solveBearingGraph(unknownApsInput(w), o);
     EXPECT_FALSE(r.converged) << r.solverReport;
     EXPECT_EQ(r.hypotheses, 1u);
 }
