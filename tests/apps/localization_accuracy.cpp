@@ -703,6 +703,15 @@ std::string whyItFails(const Room& r)
             break;
         }
     }
+    // The devices' σ holds the odometry's noise, not its systematic scale error (bearings
+    // cannot observe scale): with a large one the ellipses are too small.
+    if (r.devices.ran && r.devices.insideShare < 0.9)
+        why.push_back(
+            "odometry (scale error " + fmt(100 * r.scaleError, 1) + " %, heading drift " +
+            fmt(r.yawDrift_deg_per_m, 2) + "°/m: not in the devices' σ)");
+    if (r.drift[0].ran && r.drift[0].odometryAte_m < 0.3)
+        why.push_back(
+            "little drift to remove (odometry ATE " + fmt(r.drift[0].odometryAte_m) + " m)");
     if (!r.errors.empty()) why.push_back("a program failed: " + r.errors.front());
     std::string s;
     for (const auto& w : why) s += (s.empty() ? "" : "; ") + w;
