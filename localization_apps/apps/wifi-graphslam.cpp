@@ -76,6 +76,16 @@ int main(int argc, char** argv)
                 "NAME", cmd);
             TCLAP::ValueArg<double> argLossScale(
                 "", "loss-scale", "Robust loss scale [sigmas]", false, 1.0, "K", cmd);
+            TCLAP::ValueArg<int> argMaxIter(
+                "", "max-iterations",
+                "Ceres iterations per solve; a solve stopped by this limit is reported as not "
+                "converged",
+                false, 500, "N", cmd);
+            TCLAP::ValueArg<double> argGrowth(
+                "", "growth-window",
+                "Estimated APs: also start from a solution grown S seconds at a time (robust to "
+                "strong odometry drift); 0 = start from the odometry only",
+                false, 30, "S", cmd);
             TCLAP::SwitchArg argNoAoa("", "no-aoa", "Don't use AoA", cmd);
             TCLAP::SwitchArg argNoAod("", "no-aod", "Don't use AoD", cmd);
             TCLAP::ValueArg<std::string> argOut(
@@ -133,6 +143,10 @@ int main(int argc, char** argv)
             opt.useAoa = !argNoAoa.getValue();
             opt.useAod = !argNoAod.getValue();
             opt.verbose = argVerbose.getValue();
+            opt.maxIterations = argMaxIter.getValue();
+            opt.growthWindow_s = argGrowth.getValue();
+            if (opt.maxIterations < 1) throw std::invalid_argument("--max-iterations must be >= 1");
+            if (opt.growthWindow_s < 0) throw std::invalid_argument("--growth-window must be >= 0");
 
             std::cerr << "wifi-graphslam: " << in.bearings.size() << " bearings, "
                       << in.odometry.size() << " odometry poses, APs "
@@ -156,9 +170,17 @@ int main(int argc, char** argv)
                 << "  warnings  : " << res.warnings.summary() << "; " << res.apsWithoutBearings
                 << " APs without bearings\n"
                 << "  solver    : " << res.solverReport << "\n";
-            if (opt.apsKnown)
-                sum << "  start     : " << res.placement << " (lowest final cost of "
-                    << res.hypotheses << " optimised starts)\n";
+            sum << "  start     : " << res.placement << " (lowest final cost of " << res.hypotheses
+                << " optimised starts)\n";
+            if (!res.converged)
+            {
+                const std::string warn =
+                    "  WARNING   : Ceres did not converge (" + std::to_string(res.iterations) +
+                    " iterations): the trajectory may be far from the optimum; raise "
+                    "--max-iterations or check the bearings and the odometry noise\n";
+                sum << warn;
+                std::cerr << "wifi-graphslam:" << warn.substr(1);
+            }
             {
                 char buf[256];
                 std::snprintf(

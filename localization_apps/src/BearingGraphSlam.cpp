@@ -143,8 +143,8 @@ std::vector<TPose2D> placeTrajectoryCandidates(
 
 namespace
 {
-/** One solve. Known APs: the nodes start at `initialWorld` (interpolated at the node times) if
- *  given, else at the odometry composed with `place`. */
+/** One solve. The nodes start at `initialWorld` (interpolated at the node times) if given, else
+ *  at the odometry composed with `place`; unknown APs are triangulated on those poses. */
 GraphSlamResult solveOnce(
     const GraphSlamInput& in, const GraphSlamOptions& opt, const TPose2D& place,
     const Trajectory2D* initialWorld)
@@ -242,10 +242,13 @@ GraphSlamResult solveOnce(
         // Unknown APs: triangulate each from its AoA rays on the odometry trajectory, then its
         // yaw from AoD by voting over both mirror candidates.
         std::map<MacAddress, std::vector<BearingRay>> rays;
+        // The rays start from the initial poses: the odometry, or (grown start) the poses
+        // solved so far continued by the odometry.
+        auto initialPose = [&](size_t k) { return TPose2D(X[k][0], X[k][1], X[k][2]); };
         for (const auto& a : att)
         {
             if (!a.b->hasAoa) continue;
-            const auto s = compose(res.initialPoses.poses[a.node], a.offset);
+            const auto s = compose(initialPose(a.node), a.offset);
             BearingRay r;
             r.x = s.x, r.y = s.y, r.sensorYaw = s.phi, r.aoa = a.b->aoa;
             r.mirror = a.b->aoaMirror, r.ambiguous = a.b->aoaAmbiguous, r.sigma = a.b->aoaStd;
@@ -276,7 +279,7 @@ GraphSlamResult solveOnce(
             for (const auto& a : att)
             {
                 if (a.b->transmitter != mac || !a.b->hasAod) continue;
-                const auto s = compose(res.initialPoses.poses[a.node], a.offset);
+                const auto s = compose(initialPose(a.node), a.offset);
                 const double dir = std::atan2(s.y - d.y, s.x - d.x);
                 for (int c = 0; c < (a.b->aodAmbiguous ? 2 : 1); ++c)
                 {
@@ -418,6 +421,7 @@ GraphSlamResult solveOnce(
     res.solveTime_s = tic.Tac();
     res.initialCost = sum.initial_cost, res.finalCost = sum.final_cost;
     res.iterations = int(sum.iterations.size());
+    res.converged = sum.termination_type == ceres::CONVERGENCE;
     res.solverReport = sum.BriefReport();
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
 
@@ -512,6 +516,84 @@ GraphSlamResult solveOnce(
     return res;
 }
 
+/** The first poses of `solved` followed by the odometry continued from its last pose: the
+ *  initial poses of the next, longer window. */
+Trajectory2D continueWithOdometry(const Trajectory2D& solved, const Trajectory2D& odo)
+{
+    Trajectory2D out = solved;
+    TPose2D odoAtEnd;
+    if (!odo.interpolate(solved.t.back(), odoAtEnd))
+        throw std::logic_error("graph SLAM: solved window outside the odometry");
+    const TPose2D& end = solved.poses.back();
+    for (size_t i = 0; i < odo.size(); ++i)
+        if (odo.t[i] > solved.t.back())
+            out.push_back(odo.t[i], compose(end, inverseCompose(odoAtEnd, odo.poses[i])));
+    return out;
+}
+
+/** Unknown APs, grown start: solve the first window, then append one window after another, each
+ *  starting from the previous solution continued by the odometry (see growthWindow_s). The
+ *  last stage is the whole problem. */
+GraphSlamResult solveGrown(const GraphSlamInput& in, const GraphSlamOptions& opt, size_t& stages)
+{
+    const Trajectory2D& odo = in.odometry;
+    const double W = opt.growthWindow_s, tEnd = odo.t.back();
+    GraphSlamOptions stageOpt = opt;
+    stageOpt.apCovariance = false;  // only the last stage's covariance is wanted
+    Trajectory2D solved;
+    stages = 0;
+    for (double T = odo.t.front() + W;; T += W)
+    {
+        const bool last = T >= tEnd - 0.5 * W;  // a short tail joins the last stage
+        const Trajectory2D init =
+            solved.empty() ? Trajectory2D() : continueWithOdometry(solved, odo);
+        const Trajectory2D* start = solved.empty() ? nullptr : &init;
+        ++stages;
+        if (last) return solveOnce(in, opt, TPose2D(0, 0, 0), start);
+        GraphSlamInput window;
+        window.aps = in.aps;
+        for (size_t i = 0; i < odo.size() && odo.t[i] <= T; ++i)
+            window.odometry.push_back(odo.t[i], odo.poses[i]);
+        for (const auto& b : in.bearings)
+            if (b.t <= T) window.bearings.push_back(b);
+        try
+        {
+            solved = solveOnce(window, stageOpt, TPose2D(0, 0, 0), start).poses;
+        }
+        catch (const std::runtime_error&)
+        {
+            // Nothing to solve yet in this window (no bearings, no AP placeable): go on with the
+            // odometry as it is.
+        }
+    }
+}
+
+/** Unknown APs: the start from all rays on the odometry and the grown start; lowest cost wins. */
+GraphSlamResult solveUnknownAps(const GraphSlamInput& in, const GraphSlamOptions& opt)
+{
+    mrpt::system::CTicTac total;
+    GraphSlamResult best = solveOnce(in, opt, TPose2D(0, 0, 0), nullptr);
+    best.placement = "APs triangulated on the odometry";
+    best.hypotheses = 1;
+    const bool canGrow = !in.graph && opt.growthWindow_s > 0 && in.odometry.size() >= 2 &&
+                         in.odometry.t.back() - in.odometry.t.front() > 1.5 * opt.growthWindow_s;
+    if (canGrow)
+    {
+        size_t stages = 0;
+        auto grown = solveGrown(in, opt, stages);
+        best.hypotheses = 2;
+        if (grown.finalCost < best.finalCost)
+        {
+            best = std::move(grown);
+            best.hypotheses = 2;
+            best.placement = "grown window by window (" + std::to_string(stages) + " windows of " +
+                             std::to_string(int(std::round(opt.growthWindow_s))) + " s)";
+        }
+    }
+    best.totalTime_s = total.Tac();
+    return best;
+}
+
 /** 2D rigid transform T minimising Σ|T·a_i − b_i|² (Umeyama, no scale). */
 TPose2D alignPoints(const Eigen::Matrix2Xd& a, const Eigen::Matrix2Xd& b)
 {
@@ -522,7 +604,7 @@ TPose2D alignPoints(const Eigen::Matrix2Xd& a, const Eigen::Matrix2Xd& b)
 
 GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt)
 {
-    if (!opt.apsKnown) return solveOnce(in, opt, TPose2D(0, 0, 0), nullptr);
+    if (!opt.apsKnown) return solveUnknownAps(in, opt);
     if (in.aps.empty()) throw std::runtime_error("graph SLAM: known APs requested, none given");
     if (in.odometry.size() < 2) throw std::runtime_error("graph SLAM: the odometry has < 2 poses");
 
@@ -565,7 +647,7 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
         std::optional<GraphSlamResult> est;
         try
         {
-            est = solveOnce(ei, eo, TPose2D(0, 0, 0), nullptr);
+            est = solveUnknownAps(ei, eo);
         }
         catch (const std::runtime_error&)
         {

@@ -43,7 +43,12 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
 {
     test::TempDir tmp;
     const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
-    test::EmulatorProcess emu({"--scenario", scenario("kidnapped"), "--seed", "3"}, port, 60);
+    // 4 APs x 100 frames/s of 16 datagrams once the grabber has configured the router; the
+    // emulator records what it sends and stops sending after 16,000 datagrams (2.5 s of CSI).
+    test::EmulatorProcess emu(
+        {"--scenario", scenario("kidnapped"), "--seed", "3", "--record-sent", tmp.file("sent.pcap"),
+         "--max-datagrams", "16000"},
+        port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     test::SshdFixture sshd(emu.toolsDir());
     MRPT_WIFI_REQUIRE_SSHD(sshd);
@@ -54,13 +59,20 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
     keys["rawlog_prefix"] = "rec";
     const auto ini = test::deriveGrabberIni("csi_receiver.ini", keys, tmp.file("grab.ini"));
     const auto rec = test::runGrabber(tmp, ini, 6.0);
+    emu.stop();  // closes the record of what was sent
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
     EXPECT_NE(rec.log.find("router configured: CSI on 155/80"), std::string::npos) << rec.log;
 
-    // 4 APs x 100 frames/s for ~5 s once configured: at least 1,200 frames, all on 155/80,
-    // all complete (no loss was injected), all four transmitters.
-    ASSERT_GT(rec.frames.size(), 1200u)
+    // How many frames a wall-clock run records depends on how busy the machine is (the ssh
+    // set-up eats into the 6 s): compare with what the emulator sent instead. Every frame it
+    // sent up to the last one recorded must be there, complete (no loss was injected). The
+    // only allowance is the kernel's socket buffer overflowing on a busy machine: the drops the
+    // sensor reported, plus 1 % for those after its last status line.
+    ASSERT_FALSE(rec.frames.empty())
         << rec.log.substr(rec.log.size() > 4000 ? rec.log.size() - 4000 : 0);
+    const auto sent = test::decodeSentFrames(tmp.file("sent.pcap"), port);
+    const auto cmp = test::compareWithSent(rec.frames, sent);
+    EXPECT_EQ(cmp.neverSent, 0u);
     std::map<std::string, size_t> perTx;
     size_t incomplete = 0;
     for (const auto& f : rec.frames)
@@ -72,11 +84,19 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
         ++perTx[f->transmitter.asString()];
         EXPECT_EQ(f->nTx, 4);
     }
+    // The receiver listened before the router was configured: the first frames sent count too.
+    const size_t missing = cmp.firstRecorded + cmp.missing;
+    const size_t sentUpToLast = cmp.firstRecorded + cmp.sentInSpan;
+    const size_t allowance = test::lastReportedKernelDrops(rec.log) + sentUpToLast / 100;
+    EXPECT_LE(missing + incomplete, allowance)
+        << rec.frames.size() << " frames recorded, " << missing << " of the " << sentUpToLast
+        << " sent up to the last recorded one missing, " << incomplete << " incomplete";
     EXPECT_EQ(perTx.size(), 4u);
-    EXPECT_EQ(incomplete, 0u);
     // The pose from the .ini (pose_x = 0.10, pose_z = 0.40).
     EXPECT_NEAR(rec.frames.front()->sensorPose.x(), 0.10, 1e-9);
     EXPECT_NEAR(rec.frames.front()->sensorPose.z(), 0.40, 1e-9);
+    std::cout << rec.frames.size() << " frames recorded of " << sent.size() << " sent (" << missing
+              << " missing up to the last recorded, " << incomplete << " incomplete)\n";
 }
 
 TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
@@ -85,7 +105,8 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
     const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
     test::EmulatorProcess emu(
         {"--scenario", scenario("kidnapped"), "--seed", "5", "--loss", "0.02", "--corrupt", "0.02",
-         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80"},
+         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80", "--record-sent",
+         tmp.file("sent.pcap"), "--max-datagrams", "40000"},
         port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     // No router control here: a receiver that only listens (preconfigured router).
@@ -99,8 +120,19 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
          {"rawlog_prefix", "lossy"}},
         tmp.file("grab.ini"));
     const auto rec = test::runGrabber(tmp, ini, 4.0);
+    emu.stop();  // closes the record of what was sent
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
-    ASSERT_GT(rec.frames.size(), 800u);
+    // Capture goes on through the faults: of the frames the emulator sent (after its faults)
+    // while the grabber recorded, at most 2 % are missing (a frame is lost only when all its
+    // datagrams are; the rest is the kernel's socket buffer on a busy machine, as reported).
+    ASSERT_FALSE(rec.frames.empty()) << rec.log;
+    const auto cmp =
+        test::compareWithSent(rec.frames, test::decodeSentFrames(tmp.file("sent.pcap"), port));
+    EXPECT_LE(cmp.missing, test::lastReportedKernelDrops(rec.log) + cmp.sentInSpan / 50)
+        << cmp.missing << " of " << cmp.sentInSpan << " sent frames not recorded";
+    std::cout << rec.frames.size() << " frames recorded, " << cmp.missing << " of "
+              << cmp.sentInSpan << " sent in their span missing, " << cmp.neverSent
+              << " never sent\n";
     size_t incomplete = 0;
     for (const auto& f : rec.frames) incomplete += !f->isComplete();
     // 2% datagram loss on 16-datagram frames: ~28% of frames miss a pair; corruption adds more.

@@ -5,13 +5,16 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/obs/CObservationWiFiScan.h>
+#include <mrpt_wifi/sensor/CsiDecoder.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "TestSupport.h"
@@ -105,6 +108,77 @@ inline GrabberRecording runGrabber(
         }
     }
     return r;
+}
+
+/** The frames of a file the emulator wrote with --record-sent, decoded offline. */
+inline std::vector<CObservationWiFiCSI::Ptr> decodeSentFrames(
+    const std::string& file, uint16_t udpPort)
+{
+    std::vector<CObservationWiFiCSI::Ptr> frames;
+    CsiDecodeOptions o;
+    o.udpPort = udpPort;
+    decodeCsiFile(file, "auto", o, [&](CObservationWiFiCSI::Ptr&& f) { frames.push_back(f); });
+    return frames;
+}
+
+/** The last "kernel drops N" of the sensor's status lines in a grabber log (0 if none). */
+inline size_t lastReportedKernelDrops(const std::string& log)
+{
+    const std::string key = "kernel drops ";
+    const size_t p = log.rfind(key);
+    return p == std::string::npos ? 0 : size_t(std::stoul(log.substr(p + key.size())));
+}
+
+/** How a recording compares with what the emulator sent (`--record-sent`): frames are matched
+ *  by transmitter and sequence number (the recording may interleave the transmitters in another
+ *  order than they were sent). A wall-clock run records however much the machine's load lets
+ *  it: what counts is that nothing the emulator sent up to the last recorded frame went
+ *  missing, not how many frames that was. */
+struct SentVsRecorded
+{
+    size_t firstRecorded = 0;  //!< index among the sent frames of the earliest-sent recorded one
+    size_t sentInSpan = 0;     //!< sent frames from the earliest-sent to the latest-sent recorded
+    size_t missing = 0;        //!< of those, not recorded
+    size_t neverSent = 0;      //!< recorded frames matching no sent frame
+};
+inline SentVsRecorded compareWithSent(
+    const std::vector<CObservationWiFiCSI::Ptr>& recorded,
+    const std::vector<CObservationWiFiCSI::Ptr>& sent)
+{
+    // Sequence numbers wrap at 4096: a key may repeat in a long run, each recorded frame takes
+    // the earliest sent one of its key not taken yet.
+    std::map<std::pair<std::string, uint16_t>, std::vector<size_t>> sentAt;
+    for (size_t i = sent.size(); i-- > 0;)
+        sentAt[{sent[i]->transmitter.asString(), sent[i]->sequenceNumber}].push_back(i);
+    SentVsRecorded c;
+    size_t matched = 0, first = sent.size(), last = 0;
+    for (const auto& f : recorded)
+    {
+        auto it = sentAt.find({f->transmitter.asString(), f->sequenceNumber});
+        if (it == sentAt.end() || it->second.empty())
+        {
+            ++c.neverSent;
+            continue;
+        }
+        first = std::min(first, it->second.back());
+        last = std::max(last, it->second.back());
+        it->second.pop_back();
+        ++matched;
+    }
+    if (matched == 0) return c;
+    c.firstRecorded = first;
+    c.sentInSpan = last - first + 1;
+    c.missing = c.sentInSpan - matched;
+    return c;
+}
+
+/** The emulator's summary.json (written when it stops), waiting for it at most `s` seconds. */
+inline std::string emulatorSummaryJson(const std::string& stateDir, double s)
+{
+    const std::string path = stateDir + "/summary.json";
+    for (int i = 0; i < int(s * 20) && !std::filesystem::exists(path); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    return readFile(path);
 }
 
 }  // namespace mrpt_wifi::test

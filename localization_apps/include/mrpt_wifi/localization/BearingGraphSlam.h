@@ -40,7 +40,17 @@ struct GraphSlamOptions
      *  (ceres::Covariance; the trajectory's uncertainty is marginalised, gauge = first pose). */
     bool apCovariance = false;
     bool alignEstimatedAps = true;
-    int maxIterations = 100;
+    /** Unknown APs: besides the start from all rays on the odometry, a start grown window by
+     *  window: the first `growthWindow_s` seconds are solved (APs triangulated from their rays),
+     *  then each further window is appended with the odometry continued from the last solved
+     *  pose, the APs re-triangulated on that trajectory and the graph solved again. Drift then
+     *  only acts within one window, not along the whole drive (a heading bias of 0.5 deg/s
+     *  turns a 5-lap odometry by 2 turns' worth of degrees: rays from it place no AP). The start
+     *  with the lower final cost wins. 0 = only the start from the odometry. */
+    double growthWindow_s = 30;
+    /** Ceres iterations of each solve; a solve that stops before Ceres' convergence criteria
+     *  hold sets GraphSlamResult::converged = false (the apps warn). */
+    int maxIterations = 500;
     int threads = 2;
     bool verbose = false;
 };
@@ -68,6 +78,8 @@ struct GraphSlamResult
     size_t apsWithoutBearings = 0;
     double initialCost = 0, finalCost = 0, solveTime_s = 0, totalTime_s = 0;
     int iterations = 0;
+    /** Ceres met its convergence criteria (not stopped by maxIterations or time). */
+    bool converged = false;
     std::string solverReport;
     /** With apCovariance: xx, xy, yy [m²] of each AP of `aps` (same order); zeros for APs
      *  without bearings. apCovarianceOk is false when Ceres could not compute it (rank
@@ -78,7 +90,8 @@ struct GraphSlamResult
      *  |residual|/σ and the median |residual| [deg]. Bearings from a calibrated receiver leave a
      *  few degrees; biased ones (a calibration of another boot, antenna jumps) tens. */
     double bearingsWithin3Sigma = 0, medianWhitenedResidual = 0, medianResidual_deg = 0;
-    /** Known APs: which start won, and how many were optimised. */
+    /** Which start won, and how many were optimised (known APs: placements and the aligned
+     *  estimated-AP solution; unknown APs: the odometry start and the grown start). */
     std::string placement;
     size_t hypotheses = 1;
 };

@@ -26,6 +26,14 @@ struct RandomRoomOptions
      *  "rt-ac86u" (155/80, every bin) or "intel5300" (intel5300-linear-3.yaml, 159/40, the 30
      *  grouped subcarriers as int8). The room itself does not depend on it. */
     std::string receiver = "rt-ac86u";
+    /** 0: the robot drives to random goals (random_walk). N > 0: it drives N laps of a
+     *  rectangle 0.6–2 m inside the walls, clear of the furniture, at the drawn speed and turn
+     *  rate, and duration_s is set to the N laps (drift correction needs revisits). The room,
+     *  APs, speed and turn rate are the same draws either way. */
+    unsigned loopLaps = 0;
+    /** The odometry's systematic errors (scenario keys `scale_error`, `yaw_scale_error`,
+     *  `yaw_drift_deg_per_m`); the random room itself has none. */
+    double odometryScaleError = 0, odometryYawScaleError = 0, odometryYawDrift_deg_per_m = 0;
 };
 
 /** The receivers randomRoomYaml() knows ("rt-ac86u", "intel5300"). */

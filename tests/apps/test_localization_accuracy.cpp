@@ -1,0 +1,87 @@
+/* mrpt_wifi — a small slice of the per-room localization evaluation (localization-accuracy):
+ * one development room, short drives, every case study end to end (simulator, csi-bearings,
+ * the offline and live filters, graph SLAM, device map), its figures within generous bounds.
+ * The full sweep is a command (share/localization/README.md, "Per-room evaluation"). */
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "TestSupport.h"
+
+using namespace mrpt_wifi;
+
+namespace
+{
+/** rooms.csv as column name → value of each row. */
+std::vector<std::map<std::string, std::string>> readRoomsCsv(const std::string& path)
+{
+    std::istringstream in(test::readFile(path));
+    std::vector<std::string> header;
+    std::vector<std::map<std::string, std::string>> rows;
+    for (std::string line; std::getline(in, line);)
+    {
+        std::vector<std::string> cells;
+        std::istringstream s(line);
+        for (std::string c; std::getline(s, c, ',');) cells.push_back(c);
+        if (header.empty())
+        {
+            header = cells;
+            continue;
+        }
+        auto& row = rows.emplace_back();
+        for (size_t i = 0; i < cells.size() && i < header.size(); ++i) row[header[i]] = cells[i];
+    }
+    return rows;
+}
+
+double number(const std::map<std::string, std::string>& row, const std::string& column)
+{
+    const auto it = row.find(column);
+    if (it == row.end()) return NAN;
+    try
+    {
+        return std::stod(it->second);
+    }
+    catch (const std::exception&)
+    {
+        return NAN;
+    }
+}
+}  // namespace
+
+TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
+{
+    test::TempDir tmp;
+    const auto r = test::run(
+        test::binDir() +
+        "/localization-accuracy --rooms 1 --first-seed 7 -d 20 --laps 2 -n 1000 -w " +
+        tmp.file("work"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    // Progress per room, the per-room table, the targets and the list of rooms that miss one.
+    EXPECT_NE(r.output.find("[room 7]"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("| figure | target per room |"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("## Rooms that miss a target"), std::string::npos) << r.output;
+
+    const auto rows = readRoomsCsv(tmp.file("work/rooms.csv"));
+    ASSERT_EQ(rows.size(), 1u);
+    const auto& room = rows.front();
+    EXPECT_EQ(number(room, "seed"), 7);
+    // Every run produced its figure, and each is where a working chain puts it (the sweep's
+    // targets are tighter; these bounds catch a broken chain, not a small regression).
+    EXPECT_LE(number(room, "offline_odo_median_m"), 1.0) << r.output;
+    EXPECT_TRUE(std::isfinite(number(room, "offline_noodo_worst_all_m"))) << r.output;
+    // Live runs on the wall clock (a busy machine batches more bearings per filter step): only
+    // that both ran on the streamed room and, with odometry, stayed near it (7.1 × 7.7 m).
+    EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
+    EXPECT_TRUE(std::isfinite(number(room, "live_noodo_worst_all_m"))) << r.output;
+    EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
+    EXPECT_TRUE(std::isfinite(number(room, "reduction_estimated"))) << r.output;
+    EXPECT_EQ(number(room, "devices"), 3) << r.output;
+    EXPECT_LE(number(room, "device_median_m"), 1.0) << r.output;
+    EXPECT_GT(number(room, "bearings"), 1000) << r.output;
+    EXPECT_LE(number(room, "central_beyond30"), 0.15) << r.output;
+    EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
+}
