@@ -2,6 +2,7 @@
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/core/bits_math.h>
 #include <mrpt/system/string_utils.h>
+#include <mrpt_wifi/obs/ChainStateRecorder.h>
 #include <mrpt_wifi/sensor/CWiFiCSISensor.h>
 #include <mrpt_wifi/sensor/LiveBearingWorker.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
@@ -68,6 +69,19 @@ void CWiFiCSISensor::loadConfig_sensorSpecific(
         {
             throw std::invalid_argument("section '" + section + "': " + e.what());
         }
+    }
+    chainStates_.reset();
+    if (settings_->recordChainStates)
+    {
+        // With live bearings, the recorded state ids are those of their calibration.
+        if (bearingProcessor_)
+        {
+            const auto& pre = bearingProcessor_->preprocessor();
+            chainStates_ = std::make_unique<ChainStateRecorder>(
+                pre.options().chainStates, pre.calibration(), pre.rxArray().name);
+        }
+        else
+            chainStates_ = std::make_unique<ChainStateRecorder>();
     }
 }
 
@@ -289,6 +303,14 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
             return;
         }
         ++counters_.framesDelivered;
+        if (chainStates_)
+        {
+            chainStates_->record(*frame);
+            counters_.chainStateChanges = chainStates_->changes();
+            counters_.chainsWithJumps = chainStates_->chainsWithJumps();
+            for (const auto& n : chainStates_->takeNotices())
+                MRPT_LOG_WARN_STREAM("[" << m_sensorLabel << "] chain states: " << n);
+        }
         if (switchTarget_ && frame->chanspec.sameChannel(*switchTarget_))
         {
             measured = secondsBetween(switchRequested_, frame->timestamp);
@@ -559,6 +581,9 @@ void CWiFiCSISensor::logStatus()
       << " (MAC-filtered " << c.framesFilteredMac << ", RSSI-filtered " << c.framesFilteredRssi
       << ") | " << c.assembler.asString() << " | kernel drops " << c.kernelDrops;
     if (c.fromOtherSources) o << " | other sources " << c.fromOtherSources;
+    if (c.chainsWithJumps || c.chainStateChanges)
+        o << " | chain state changes " << c.chainStateChanges << " (" << c.chainsWithJumps
+          << " chain" << (c.chainsWithJumps == 1 ? "" : "s") << " jumping)";
     if (c.scans) o << " | scans " << c.scans << ", switches " << c.channelSwitches;
     if (const auto d = lastSwitchDowntime())
         o << " | last switch downtime " << int(*d * 1000) << " ms";

@@ -39,6 +39,7 @@ const std::set<std::string>& knownKeys()
         "source", "udp_bind_address", "udp_port", "udp_receive_buffer", "pcap_file", "pcap_speed",
         "serial_baud", "router_address", "mac_filter", "min_rssi_dBm", "format", "overwritten_bins",
         "frame_timeout", "core_mask", "stream_mask", "status_period", "abort_on_error",
+        "record_chain_states",
         // control path: WiROS's 'login', 'channel', 'packet', 'setup' groups
         "router_control", "login_host", "login_port", "login_user", "login_identity_file",
         "login_known_hosts", "login_accept_new_host_key", "login_password_env", "login_askpass",
@@ -167,6 +168,7 @@ CsiSensorSettings loadCsiSensorSettings(
             uint8_t(parseUnsigned(str("stream_mask", maskDefault), "stream_mask", 0xF));
         s.statusPeriod_s = c.read_double(section, "status_period", 10.0);
         s.abortOnError = c.read_bool(section, "abort_on_error", false);
+        s.recordChainStates = c.read_bool(section, "record_chain_states", true);
 
         s.routerControl = c.read_bool(section, "router_control", false);
         s.ssh.host = str("login_host", s.ssh.host);

@@ -7,9 +7,13 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/ChainStates.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "GrabberRun.h"
@@ -120,4 +124,111 @@ TEST(LiveBearingsGrabber, ReplayGivesTheBearingsCsiBearingsComputesOffline)
         bearings += live[i].second.size();
     }
     EXPECT_GE(bearings, 2 * 18u);  // a bearing and its bearing-range for (almost) every frame
+}
+
+TEST(LiveBearingsGrabber, RecordsTheChainJumpStatesOfEveryFrame)
+{
+    // loop.yaml with its chains switching among 3 delay states (3 ns apart) at 0.3 Hz, as a
+    // pcap, replayed through rawlog-grabber at 10× its pace: every recorded frame carries its
+    // chains' delays and states, the states follow the simulator's (ids mapped by majority),
+    // and the status line counts the changes.
+    test::TempDir tmp;
+    std::ifstream in(test::sourceDir() + "/share/scenarios/loop.yaml");
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string shipped =
+        "antenna_jumps: {enabled: true, states: 3, step_ns: 3, rate_hz: 0.05}";
+    std::string scenario = text.str();
+    const size_t at = scenario.find(shipped);
+    ASSERT_NE(at, std::string::npos) << "loop.yaml's antenna_jumps line changed";
+    scenario.replace(
+        at, shipped.size(),
+        "antenna_jumps: {enabled: true, states: 3, step_ns: 3, rate_hz: 0.3, state_phase: true}");
+    // The scenario names its arrays relative to share/scenarios.
+    std::filesystem::create_directories(tmp.file("scenarios"));
+    std::filesystem::create_directory_symlink(
+        test::sourceDir() + "/share/arrays", tmp.file("arrays"));
+    std::ofstream(tmp.file("scenarios/jumpy.yaml")) << scenario;
+    const auto sim = test::run(
+        test::binDir() + "/wifi-sim -q -s 3 -d 20 " + tmp.file("scenarios/jumpy.yaml") +
+        " /dev/null --pcap " + tmp.file("jumpy.pcap") + " -t " + tmp.file("truth"));
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+
+    const auto ini = test::deriveGrabberIni(
+        "csi_receiver.ini",
+        {{"router_control", "false"},
+         {"source", "pcap"},
+         {"pcap_file", tmp.file("jumpy.pcap")},
+         {"pcap_speed", "10"},
+         {"router_address", ""},
+         {"status_period", "0.5"},
+         {"rawlog_prefix", "jumpy"}},
+        tmp.file("jumpy.ini"));
+    const auto rec = test::runGrabber(tmp, ini, 4.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    ASSERT_GT(rec.frames.size(), 50u) << rec.log;
+
+    // The simulator's states per (transmitter, sequence number).
+    std::map<std::string, std::string> truth;
+    {
+        std::ifstream f(tmp.file("truth/frames.csv"));
+        std::string line;
+        std::getline(f, line);
+        while (std::getline(f, line))
+        {
+            std::vector<std::string> col;
+            std::stringstream ss(line);
+            for (std::string c; std::getline(ss, c, ',');) col.push_back(c);
+            truth[col[3] + "#" + col[4]] = col.back();
+        }
+    }
+    size_t withStates = 0, classified = 0, agree = 0;
+    std::map<std::pair<int, std::string>, std::map<int, size_t>> votes;  // (chain, truth) → id
+    std::vector<std::pair<std::string, std::vector<uint8_t>>> seen;
+    for (const auto& f : rec.frames)
+    {
+        if (f->chainState.size() != 4 || f->chainDelay_ns.size() != 4) continue;
+        ++withStates;
+        const auto it =
+            truth.find(f->transmitter.asString() + "#" + std::to_string(f->sequenceNumber));
+        ASSERT_NE(it, truth.end()) << f->transmitter.asString() << " " << f->sequenceNumber;
+        seen.emplace_back(it->second, f->chainState);
+    }
+    EXPECT_GE(double(withStates), 0.99 * double(rec.frames.size()));
+    // Split "a|b|c|d" into per-chain true states.
+    const auto chainOf = [](const std::string& s, int i)
+    {
+        std::vector<std::string> p;
+        std::stringstream ss(s);
+        for (std::string c; std::getline(ss, c, '|');) p.push_back(c);
+        return p.at(size_t(i));
+    };
+    for (const auto& [t, ids] : seen)
+        for (int i = 1; i < 4; ++i)
+            if (ids[size_t(i)] != kUnknownChainState) votes[{i, chainOf(t, i)}][ids[size_t(i)]]++;
+    std::map<std::pair<int, std::string>, int> idOf;
+    for (const auto& [key, v] : votes)
+        idOf[key] = std::max_element(
+                        v.begin(), v.end(), [](auto& a, auto& b) { return a.second < b.second; })
+                        ->first;
+    std::set<std::pair<int, std::string>> trueStates;
+    for (const auto& [t, ids] : seen)
+        for (int i = 1; i < 4; ++i)
+        {
+            trueStates.insert({i, chainOf(t, i)});
+            if (ids[size_t(i)] == kUnknownChainState) continue;
+            ++classified;
+            agree += idOf[{i, chainOf(t, i)}] == ids[size_t(i)];
+        }
+    std::cout << seen.size() << " frames with states; " << classified
+              << " chain-frames classified, " << agree << " in the right state\n";
+    EXPECT_GT(trueStates.size(), 3u) << "the simulator switched no chain in the recorded span";
+    EXPECT_GE(double(classified), 0.7 * 3 * double(seen.size()));
+    EXPECT_GE(double(agree), 0.9 * double(classified));
+    EXPECT_NE(rec.log.find("chain state changes"), std::string::npos) << rec.log;
+
+    // RawLogViewer's text shows them.
+    std::ostringstream d;
+    rec.frames.back()->getDescriptionAsText(d);
+    EXPECT_NE(d.str().find("Receive chain states"), std::string::npos) << d.str();
 }

@@ -23,6 +23,7 @@ namespace mrpt_wifi
 class UdpCsiReceiver;
 class PcapReader;
 class LiveBearingWorker;
+class ChainStateRecorder;
 namespace bearing
 {
 class BearingProcessor;
@@ -69,6 +70,8 @@ public:
         uint64_t scans = 0;
         uint64_t channelSwitches = 0;
         uint64_t controlErrors = 0;
+        uint64_t chainStateChanges = 0;  //!< receive-chain jump-state changes (all channels)
+        uint64_t chainsWithJumps = 0;    //!< chains seen in more than one state
         CsiFrameAssemblerStats assembler;
     };
     Counters counters() const;
@@ -104,6 +107,7 @@ private:
         const uint8_t* data, size_t len, mrpt::Clock::time_point t, const std::string& src);
     void onFrame(CObservationWiFiCSI::Ptr&& frame);
     void drainReplay();
+    std::unique_ptr<ChainStateRecorder> chainStates_;  //!< record_chain_states; under mutex_
 
     // Control path: one worker thread runs router jobs in order; results come back as events.
     std::unique_ptr<NexmonRouterControl> router_;

@@ -36,6 +36,9 @@ struct CsiSensorSettings
     CsiFrameAssemblerOptions assembler;
     double statusPeriod_s = 10.0;
     bool abortOnError = false;
+    /** `record_chain_states`: measure each frame's inter-chain delays and jump states onto the
+     *  observation (ChainStateRecorder), with state changes in the status line. */
+    bool recordChainStates = true;
 
     bool routerControl = false;
     SshOptions ssh;
