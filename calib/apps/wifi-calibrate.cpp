@@ -53,6 +53,11 @@ std::string fixed(double v, int p = 1)
     return o.str();
 }
 
+std::string signedFixed(double v, int p)
+{
+    return (v >= 0 ? "+" : "") + fixed(v, p);
+}
+
 /** Circular mean [rad] of a phase curve. */
 double meanPhase(const std::vector<double>& p)
 {
@@ -456,6 +461,23 @@ int main(int argc, char** argv)
                 for (size_t i = 0; i < c.antennas(); ++i)
                     std::cout << " " << i << ":" << fixed(c.gainAt(i), 2) << "dB";
                 std::cout << "\n";
+                if (!d.chainStates.empty() || d.chainStateChanges > 0)
+                {
+                    // The 4366c0's chains jump among delay states: one set of offsets per state.
+                    std::cout << "  chain states     : " << d.chainStateChanges << " changes, "
+                              << d.unknownStateFrames
+                              << " frames left out (a chain's state not measurable or too rare)\n";
+                    for (const auto& st : d.chainStates)
+                        std::cout << "    chain " << st.antenna << " state " << int(st.state)
+                                  << ": " << std::setw(6) << st.frames << " frames, delay "
+                                  << signedFixed(st.delay_s * 1e9, 2) << " ns"
+                                  << (st.reference
+                                          ? " (reference)"
+                                          : ", offset " + signedFixed(st.deltaDelay_s * 1e9, 2) +
+                                                " ns " + signedFixed(st.deltaPhase_rad * kDeg, 1) +
+                                                " deg")
+                                  << "\n";
+                }
                 if (!res.bearingErrorAfter_deg.empty())
                     std::cout << "  bearing error    : median "
                               << fixed(quantile(res.bearingErrorBefore_deg, 0.5), 2) << " -> "

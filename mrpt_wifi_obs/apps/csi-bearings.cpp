@@ -280,6 +280,7 @@ int main(int argc, char** argv)
 
             std::map<MacAddress, TransmitterStats> stats;
             std::array<uint64_t, kRejectReasonCount> rejected{};
+            std::vector<std::string> chainStateNotices;
             uint64_t csiSeen = 0, bearingsTotal = 0, imagesTotal = 0;
             const double toDeg = 180.0 / M_PI;
 
@@ -309,6 +310,8 @@ int main(int argc, char** argv)
                 RejectReason why;
                 auto b = processor.process(c, &why);
                 if (why != RejectReason::Accepted) ++rejected[size_t(why)];
+                for (auto& n : processor.preprocessor().takeChainStateNotices())
+                    chainStateNotices.push_back(std::move(n));
                 if (!b) return;
                 ++bearingsTotal;
                 ++st.bearings;
@@ -453,6 +456,22 @@ int main(int argc, char** argv)
             for (size_t i = 1; i < kRejectReasonCount; ++i)
                 if (rejected[i])
                     std::cout << "  " << toString(RejectReason(i)) << ": " << rejected[i] << "\n";
+            // The 4366c0's receive chains jump among delay states (issue 21).
+            const auto trackers = processor.preprocessor().chainStateTrackers();
+            if (!trackers.empty())
+            {
+                std::cout << "Receive chain states: "
+                          << processor.preprocessor().chainStateChanges() << " changes";
+                const bool applied = std::any_of(
+                    trackers.begin(), trackers.end(), [](auto* t) { return t->applies(); });
+                std::cout << (applied ? " (corrected with the calibration's per-state offsets)"
+                              : calib.empty() ? " (reported only: no calibration)"
+                                              : " (reported only: the calibration holds no states; "
+                                                "wifi-calibrate makes one that does)")
+                          << "\n";
+                for (const auto* t : trackers) std::cout << t->summary();
+            }
+            for (const auto& n : chainStateNotices) std::cerr << "warning: " << n << "\n";
             if (argImages.isSet())
                 std::cout << "Images: " << imagesTotal << " PNG files in " << argImages.getValue()
                           << "\n";
