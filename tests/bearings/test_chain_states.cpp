@@ -319,3 +319,66 @@ TEST(ChainStates, NoStateChangeOnRealUbiLocateCaptures)
         EXPECT_LT(largestStep_ns, 1.0) << name;
     }
 }
+
+TEST(ChainStates, StateMissingFromTheCalibrationIsNamedThenLearntOnline)
+{
+    // The calibration drive never saw one state of chain 1: frames in it give no bearing and
+    // a notice names it, until its phase is learnt from the other chains; the learnt offset
+    // then matches the truth.
+    const sim::Scenario sc = jumpyRoom(3, 0.2, 40);
+    sim::Simulator simulator(sc);
+    const AntennaArray rx = fromSimArray(sc.receiver.array);
+    PhaseCalibration cal = truthCalibration(simulator, rx, sc.transmitters.front().chanspec);
+    // Drop chain 1's state farthest from its reference, as a short drive might.
+    const ChainStateCalibration* dropped = nullptr;
+    for (const auto& st : cal.chainStates)
+        if (st.antenna == 1 &&
+            (!dropped || std::abs(st.deltaDelay_s) > std::abs(dropped->deltaDelay_s)))
+            dropped = &st;
+    ASSERT_NE(dropped, nullptr);
+    ASSERT_NE(dropped->deltaDelay_s, 0.0);
+    const ChainStateCalibration missing = *dropped;
+    cal.chainStates.erase(cal.chainStates.begin() + (dropped - cal.chainStates.data()));
+
+    CsiPreprocessor pre({}, rx, CalibrationStore::fromCalibration(cal));
+    sim::SimEvent ev;
+    CleanCsi clean;
+    size_t inMissing = 0, rejectedInMissing = 0, acceptedInMissing = 0;
+    std::vector<std::string> notices;
+    while (simulator.next(ev))
+    {
+        if (ev.kind != sim::SimEvent::Kind::Csi) continue;
+        const auto why = pre.process(*ev.csi, clean);
+        for (auto& n : pre.takeChainStateNotices()) notices.push_back(n);
+        if (ev.frame.packet.jumpState[1] != missing.state) continue;
+        ++inMissing;
+        rejectedInMissing += why == RejectReason::UnknownChainState;
+        acceptedInMissing += why == RejectReason::Accepted;
+    }
+    ASSERT_GT(inMissing, 100u) << "chain 1 never visited the dropped state";
+    EXPECT_GT(rejectedInMissing, 0u);
+    EXPECT_GT(acceptedInMissing, inMissing / 2) << "the state was not learnt";
+    ASSERT_FALSE(notices.empty());
+    bool named = false;
+    for (const auto& n : notices) named = named || n.find("chain 1") != std::string::npos;
+    EXPECT_TRUE(named) << notices.front();
+
+    const auto trackers = pre.chainStateTrackers();
+    ASSERT_EQ(trackers.size(), 1u);
+    const ChainStateInfo* learnt = nullptr;
+    for (const auto& s : trackers.front()->states(1))
+        if (std::abs(s.delay_s - missing.delay_s) < 1e-9) learnt = &s;
+    ASSERT_NE(learnt, nullptr) << trackers.front()->summary();
+    std::cout << inMissing << " frames in the missing state, " << rejectedInMissing
+              << " without a bearing; learnt " << learnt->deltaDelay_s * 1e9 << " ns "
+              << learnt->deltaPhase_rad * 180 / M_PI << " deg, truth " << missing.deltaDelay_s * 1e9
+              << " ns " << missing.deltaPhase_rad * 180 / M_PI << " deg\n"
+              << notices.front() << "\n";
+    EXPECT_EQ(learnt->origin, ChainStateOrigin::LearntOnline) << trackers.front()->summary();
+    EXPECT_NEAR(learnt->deltaDelay_s * 1e9, missing.deltaDelay_s * 1e9, 0.3);
+    EXPECT_LT(
+        std::abs(std::remainder(learnt->deltaPhase_rad - missing.deltaPhase_rad, 2 * M_PI)) * 180 /
+            M_PI,
+        5.0)  // measured: 1.7°
+        << "learnt " << learnt->deltaPhase_rad << " rad, truth " << missing.deltaPhase_rad;
+}
