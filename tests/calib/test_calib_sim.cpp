@@ -7,6 +7,7 @@
 #include <mrpt_wifi/calib/CalibrationCheck.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 
+#include <map>
 #include <set>
 
 #include "CalibTestSupport.h"
@@ -278,7 +279,19 @@ TEST(CalibSim, StaticSplitterRecoversOffsetsDirectly)
 // phase, switching at 0.1 Hz). The calibrator groups the same drive by state and solves every
 // state's offsets. The frames carry the simulator's true states here, so this checks the
 // per-state solve itself; the per-frame classifier is tested in test_chain_states.
-TEST(CalibSim, PerStateOffsetsFromADriveWithJumps)
+namespace
+{
+struct PerStateResult
+{
+    size_t states = 0, visited = 0;
+    double rms_deg = 0;
+};
+
+/** A calibration drive with jump states (3 states, 3 ns apart, each with its own phase, 0.1 Hz):
+ *  the calibrator's per-state offsets against the simulator's truth. `trueStates`: the frames
+ *  carry the simulator's states; otherwise the calibrator's own classification, whose ids are
+ *  mapped to the simulator's by majority. */
+PerStateResult perStateOffsets(bool trueStates)
 {
     DriveSpec d;
     d.frameRate_Hz = 50;
@@ -294,6 +307,7 @@ TEST(CalibSim, PerStateOffsetsFromADriveWithJumps)
     FramePreparer prep(calibtest::arrayOf(d), po);
     PhaseCalibrator cal(calibtest::arrayOf(d));
     std::set<std::pair<unsigned, int>> visited;
+    std::map<std::pair<unsigned, int>, std::map<int, size_t>> votes;  // (chain, id) → truth
     calibtest::driveFrames(
         simulator, prep, false,
         [&](const CalibrationFrame& f, const sim::FrameTruth& t)
@@ -301,24 +315,34 @@ TEST(CalibSim, PerStateOffsetsFromADriveWithJumps)
             CalibrationFrame g = f;
             for (unsigned i = 0; i < g.nRx; ++i)
             {
-                g.chainState[i] = t.packet.jumpState[i];
                 visited.insert({i, t.packet.jumpState[i]});
+                votes[{i, g.chainState[i]}][t.packet.jumpState[i]]++;
+                if (trueStates) g.chainState[i] = t.packet.jumpState[i];
             }
             cal.add(g);
         });
     const auto res = cal.solve(cal.channels().at(0));
     const PhaseCalibration& c = res.calibration;
-    ASSERT_GE(visited.size(), 6u) << "the drive should visit several states per chain";
     const auto& hw = simulator.hardware();
     const Chanspec cs = c.chanspec;
     const double fc = cs.centerFrequencyHz();
+    PerStateResult r;
+    r.visited = visited.size();
     double acc = 0;
-    size_t n = 0, states = 0;
+    size_t n = 0;
     for (const auto& st : c.chainStates)
     {
-        ++states;
-        const double tau = hw.jumpStateDelay_s(st.state);
-        const double psi = hw.jumpStatePhase_rad(st.antenna, st.state);
+        ++r.states;
+        int state = st.state;
+        if (!trueStates)
+        {
+            const auto& v = votes.at({st.antenna, st.state});
+            state = std::max_element(
+                        v.begin(), v.end(), [](auto& a, auto& b) { return a.second < b.second; })
+                        ->first;
+        }
+        const double tau = hw.jumpStateDelay_s(uint8_t(state));
+        const double psi = hw.jumpStatePhase_rad(st.antenna, uint8_t(state));
         for (size_t j = 0; j < c.subcarriers.size(); ++j)
         {
             const int k = c.subcarriers[j];
@@ -333,8 +357,29 @@ TEST(CalibSim, PerStateOffsetsFromADriveWithJumps)
             ++n;
         }
     }
-    const double rms_deg = std::sqrt(acc / double(std::max<size_t>(n, 1))) * 180 / M_PI;
-    std::cout << "per-state offsets: " << states << " states, RMS error " << rms_deg << " deg\n";
-    EXPECT_EQ(states + 0, visited.size() - 1) << "every visited state of chains 1-3";
-    EXPECT_LT(rms_deg, 2.0);
+    r.rms_deg = std::sqrt(acc / double(std::max<size_t>(n, 1))) * 180 / M_PI;
+    return r;
+}
+}  // namespace
+
+// Issue 21's target: per-state offsets within 2° RMS of the truth. Measured: 0.51° with the
+// simulator's states, 1.46° with the calibrator's own classification (what wifi-calibrate does).
+TEST(CalibSim, PerStateOffsetsFromADriveWithJumps)
+{
+    const auto r = perStateOffsets(true);
+    std::cout << "per-state offsets (true states): " << r.states << " states, RMS error "
+              << r.rms_deg << " deg\n";
+    ASSERT_GE(r.visited, 6u) << "the drive should visit several states per chain";
+    EXPECT_EQ(r.states + 0, r.visited - 1) << "every visited state of chains 1-3";
+    EXPECT_LT(r.rms_deg, 2.0);
+}
+
+TEST(CalibSim, PerStateOffsetsWithTheCalibratorsOwnStates)
+{
+    const auto r = perStateOffsets(false);
+    std::cout << "per-state offsets (classified states): " << r.states << " states, RMS error "
+              << r.rms_deg << " deg\n";
+    ASSERT_GE(r.visited, 6u);
+    EXPECT_EQ(r.states + 0, r.visited - 1) << "every visited state of chains 1-3, no spurious one";
+    EXPECT_LT(r.rms_deg, 2.0);
 }
