@@ -281,8 +281,8 @@ void CObservationWiFiCSI::getDescriptionAsText(std::ostream& o) const
                     o << "state " << int(chainState[rx]);
             }
             if (rx < chainDelay_ns.size() && std::isfinite(chainDelay_ns[rx]))
-                o << " (" << std::showpos << std::fixed << std::setprecision(2)
-                  << chainDelay_ns[rx] << std::noshowpos << " ns)";
+                o << " (" << std::showpos << std::fixed << std::setprecision(2) << chainDelay_ns[rx]
+                  << std::noshowpos << " ns)";
         }
         o << "  [delay relative to chain 0; ? = could not tell]\n";
     }

@@ -76,8 +76,7 @@ size_t ChainStateRecorder::chainsWithJumps() const
 std::string ChainStateRecorder::summary() const
 {
     std::ostringstream o;
-    for (const auto& [key, t] : trackers_)
-        o << channelNames_.at(key) << ":\n" << t.summary();
+    for (const auto& [key, t] : trackers_) o << channelNames_.at(key) << ":\n" << t.summary();
     return o.str();
 }
 
