@@ -579,6 +579,10 @@ int main(int argc, char** argv)
             mrpt::config::CConfigFile ini(iniPath);
             const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
             LiveLocalizer loc(ini, iniDir);
+            if (loc.areaFromInitialPdf())
+                std::cerr
+                    << "note: the map sets no area (min_x ... max_y in its creationOpts): the "
+                       "robot is kept inside the init_PDF box\n";
             auto fallback = makeFallbackProcessor(ini, iniDir, false);
             LiveDeviceMapper mapper(ini, "wifi-localize");
             TransmitterMap devTruth;
@@ -881,7 +885,21 @@ int main(int argc, char** argv)
                 << fmt(percentile(lags, 1.0) * 1e3, 1)
                 << " (pose output time - timestamp of the newest bearing in it)\n"
                 << "  odometry       : "
-                << (loc.hasOdometry() ? "yes" : "none (unknown motion model)") << "\n";
+                << (loc.hasOdometry()
+                        ? "yes"
+                        : "none (unknown motion model: " + loc.unknownMotion().asString() + ")")
+                << "\n"
+                << "  recovery       : " << loc.recoveryOptions().asString() << ": "
+                << recoverySummary(loc.recovery()) << "\n";
+            if (const auto& a = loc.wifiMap().area(); a)
+            {
+                const auto outside = std::count_if(
+                    est.poses.begin(), est.poses.end(),
+                    [&](const auto& p) { return !loc.wifiMap().inArea(p.x, p.y); });
+                sum << "  area           : x " << fmt(a->min.x, 2) << ".." << fmt(a->max.x, 2)
+                    << " y " << fmt(a->min.y, 2) << ".." << fmt(a->max.y, 2) << " m, " << outside
+                    << " estimates outside it\n";
+            }
             if (argGt.isSet() && !est.empty())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -17,6 +17,8 @@
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/LiveLocalizer.h>  // initialPdfArea
+#include <mrpt_wifi/localization/ParticleRecovery.h>
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
@@ -51,6 +53,17 @@ public:
         motion_ = motion;
         cv_.emplace(motion);
     }
+    /** Re-seeding when the bearings disagree with the estimate (`map` must outlive run()).
+     *  With odometry in an observation-only rawlog, this app makes the action/sensory-frame
+     *  pairs itself (as MRPT's app does, with `odometryModel`), so the action can carry it. */
+    void setRecovery(
+        const ParticleRecoveryOptions& options, const CWiFiBearingMap& map,
+        const mrpt::obs::CActionRobotMovement2D::TMotionModelOptions& odometryModel)
+    {
+        recovery_.emplace(options, &map);
+        odoModel_ = odometryModel;
+    }
+    const std::optional<ParticleRecovery>& recovery() const { return recovery_; }
     /** Reproducible runs. MRPT's app seeds the global generator from the clock just before its
      *  runs; its log line announcing each run (before the particles are drawn) is where the
      *  seed goes in. Must be called before run(). */
@@ -71,8 +84,8 @@ protected:
         mrpt::obs::CActionCollection::Ptr& action, mrpt::obs::CSensoryFrame::Ptr& observations,
         mrpt::obs::CObservation::Ptr& observation) override
     {
-        const bool ok =
-            DataSourceRawlog::impl_get_next_observations(action, observations, observation);
+        bool ok = DataSourceRawlog::impl_get_next_observations(action, observations, observation);
+        if (recovery_) ok = pairWithOdometry(ok, action, observations, observation);
         // Odometry readings only become the next step's action: not a filter step.
         mrpt::Clock::time_point stamp = INVALID_TIMESTAMP;
         if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry))
@@ -91,32 +104,83 @@ protected:
             const double t = mrpt::Clock::toDouble(stamp);
             progress_.update((t - t0_) / (t1_ - t0_), std::to_string(steps) + " steps");
         }
-        if (cv_ && ok && action && stamp != INVALID_TIMESTAMP) predictAction(action, stamp);
+        if ((cv_ || recovery_) && ok && action && stamp != INVALID_TIMESTAMP)
+            adjustAction(action, observations, stamp);
         return ok;
     }
 
 private:
-    // Replaces the rawlog's zero-mean action by the unknown-motion model's, centred on the
-    // constant-velocity prediction from the estimates of the steps before this one.
-    void predictAction(mrpt::obs::CActionCollection::Ptr& action, mrpt::Clock::time_point stamp)
+    // Observation-only rawlog with odometry: the readings are consumed here and the next
+    // bearing comes as an action/sensory-frame pair, the action the odometry increment through
+    // the same Gaussian model MRPT's app uses ([DummyOdometryParams]).
+    bool pairWithOdometry(
+        bool ok, mrpt::obs::CActionCollection::Ptr& action,
+        mrpt::obs::CSensoryFrame::Ptr& observations, mrpt::obs::CObservation::Ptr& observation)
+    {
+        while (ok && observation && IS_CLASS(*observation, mrpt::obs::CObservationOdometry))
+        {
+            const auto& odo = static_cast<const mrpt::obs::CObservationOdometry&>(*observation);
+            // The first reading, or a new run of the filter (time going backwards).
+            if (!lastOdo_ || odo.timestamp < lastOdoStamp_) odoAtLastStep_ = odo.odometry;
+            lastOdo_ = odo.odometry, lastOdoStamp_ = odo.timestamp;
+            ok = DataSourceRawlog::impl_get_next_observations(action, observations, observation);
+        }
+        if (!ok || !observation || !lastOdo_) return ok;
+        observations = mrpt::obs::CSensoryFrame::Create();
+        observations->insert(observation);
+        mrpt::obs::CActionRobotMovement2D act;
+        act.computeFromOdometry(*lastOdo_ - *odoAtLastStep_, odoModel_);
+        act.timestamp = observation->timestamp;
+        odoAtLastStep_ = lastOdo_;
+        action = mrpt::obs::CActionCollection::Create();
+        action->insert(act);
+        observation.reset();
+        return ok;
+    }
+
+    // Without odometry: the rawlog's zero-mean action replaced by the unknown-motion model's,
+    // centred on the constant-velocity prediction from the estimates of the steps before this
+    // one. With recovery: a share of the particles re-seeded while the bearings disagree with
+    // the estimate.
+    void adjustAction(
+        mrpt::obs::CActionCollection::Ptr& action, const mrpt::obs::CSensoryFrame::Ptr& sf,
+        mrpt::Clock::time_point stamp)
     {
         const double t = mrpt::Clock::toDouble(stamp);
-        if (lastStamp_ != INVALID_TIMESTAMP)
-        {
-            if (const auto it = out_estimated_path.find(lastStamp_); it != out_estimated_path.end())
-                cv_->addEstimate(
-                    mrpt::Clock::toDouble(lastStamp_),
-                    mrpt::math::TPose2D(it->second.x, it->second.y, it->second.yaw));
-        }
         // A new run of the filter (several particle counts or repetitions) starts over.
         const bool restart = lastStamp_ == INVALID_TIMESTAMP || stamp < lastStamp_;
-        if (restart) cv_->reset();
+        if (restart)
+        {
+            if (cv_) cv_->reset();
+            if (recovery_) recovery_->reset();
+        }
+        else if (const auto it = out_estimated_path.find(lastStamp_);
+                 it != out_estimated_path.end())
+        {
+            const mrpt::math::TPose2D est(it->second.x, it->second.y, it->second.yaw);
+            if (cv_) cv_->addEstimate(mrpt::Clock::toDouble(lastStamp_), est);
+            if (recovery_) recovery_->setEstimate(est);
+        }
         const double dt = restart ? 0.0 : t - mrpt::Clock::toDouble(lastStamp_);
-        auto a = motion_.makeAction(dt, cv_->predictIncrement(t));
-        a->timestamp = stamp;
-        action = mrpt::obs::CActionCollection::Create();
-        action->insert(*a);
         lastStamp_ = stamp;
+        double reseed = 0;
+        if (recovery_)
+        {
+            if (sf)
+                for (const auto& o : *sf)
+                    if (const auto* b = dynamic_cast<const CObservationWiFiBearing*>(o.get()))
+                        recovery_->checkBearing(mrpt::Clock::toDouble(b->timestamp), *b);
+            reseed = recovery_->reseedFraction(t, dt);
+        }
+        if (!cv_ && reseed <= 0) return;
+        const auto best = action->getBestMovementEstimation();
+        if (!cv_ && !best) return;
+        mrpt::obs::CActionRobotMovement2D a =
+            cv_ ? *motion_.makeAction(dt, cv_->predictIncrement(t)) : *best;
+        if (reseed > 0) a = withReseeding(a, reseed, recovery_->reseedRadius_m());
+        a.timestamp = stamp;
+        action = mrpt::obs::CActionCollection::Create();
+        action->insert(a);
     }
 
     cli::Progress progress_;
@@ -124,6 +188,10 @@ private:
     double t0_ = 0, t1_ = 0;
     UnknownMotion motion_;
     std::optional<ConstantVelocityPrediction> cv_;
+    std::optional<ParticleRecovery> recovery_;
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
+    std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
+    mrpt::Clock::time_point lastOdoStamp_ = INVALID_TIMESTAMP;
     mrpt::Clock::time_point lastStamp_ = INVALID_TIMESTAMP;
 };
 
@@ -238,6 +306,15 @@ int main(int argc, char** argv)
                     ": the [MetricMap] section creates no wifiBearingMap (wifiBearingMap_count=1 "
                     "missing?)");
             const auto& txs = wifiMap->transmitters();
+            // The robot can't leave the building: without an area of its own the map is bounded
+            // by the init_PDF box (where the kidnapped robot may be).
+            bool areaFromInitPdf = false;
+            if (!wifiMap->area())
+                if (const auto box = initialPdfArea(ini); box)
+                {
+                    wifiMap->setArea(box);
+                    areaFromInitPdf = true;
+                }
 
             // ---- The input.
             std::string rawlog = argRawlog.getValue();
@@ -285,6 +362,11 @@ int main(int argc, char** argv)
                 std::cerr << "note: no odometry: the motion model is the unknown-motion "
                           << motion.asString() << "\n";
             }
+            ParticleRecoveryOptions recoveryOptions;
+            recoveryOptions.loadFromConfigFile(ini, "ParticleRecovery");
+            if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
+                std::cerr << "warning: [ParticleRecovery] needs the map's area (min_x ... max_y "
+                             "in its creationOpts, or an init_PDF box): off\n";
             std::vector<BearingRecord> usable;
             // The kidnapping moment: the filter starts lost (uniform particles) here.
             const double tSkip = std::min_element(
@@ -335,6 +417,8 @@ int main(int argc, char** argv)
             app.allow_quit_on_esc_key = false;
             app.fill_out_estimated_path = true;
             if (odo.empty()) app.setUnknownMotion(motion);
+            if (recoveryOptions.rate_hz > 0)
+                app.setRecovery(recoveryOptions, *wifiMap, odometryMotionModel(ini));
             {
                 const std::string iniPath = argIni.getValue();
                 const char* a[] = {"wifi-pf-localization", iniPath.c_str(), rawlog.c_str()};
@@ -345,6 +429,14 @@ int main(int argc, char** argv)
                 app.params.write(sect, "particles_count", argParticles.getValue());
             app.params.write(sect, "logOutput_dir", outDir + "/mrpt");
             if (!txFile.empty()) app.params.write(mapSect, "transmitters_file", txFile);
+            if (areaFromInitPdf)
+            {
+                const auto& a = *wifiMap->area();
+                app.params.write(mapSect, "min_x", a.min.x);
+                app.params.write(mapSect, "max_x", a.max.x);
+                app.params.write(mapSect, "min_y", a.min.y);
+                app.params.write(mapSect, "max_y", a.max.y);
+            }
             const auto counts = app.params.read_string(sect, "particles_count", "", true);
             app.seedEachRun(argSeed.getValue());
             mrpt::system::CTicTac timer;
@@ -369,6 +461,19 @@ int main(int argc, char** argv)
                 << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
                 << fmt(app.steps / std::max(runTime, 1e-9), 1) << " steps/s)\n"
                 << "  map warnings   : " << wifiMap->unknownTransmitterCount() << "\n";
+            if (const auto& a = wifiMap->area(); a)
+            {
+                const auto outside = std::count_if(
+                    est.poses.begin(), est.poses.end(),
+                    [&](const auto& p) { return !wifiMap->inArea(p.x, p.y); });
+                sum << "  area           : x " << fmt(a->min.x, 2) << ".." << fmt(a->max.x, 2)
+                    << " y " << fmt(a->min.y, 2) << ".." << fmt(a->max.y, 2) << " m"
+                    << (areaFromInitPdf ? " (the init_PDF box)" : " (the map's)") << ", " << outside
+                    << " estimates outside it\n";
+            }
+            sum << "  recovery       : " << recoveryOptions.asString();
+            if (const auto& r = app.recovery(); r) sum << ": " << recoverySummary(*r);
+            sum << "\n";
             if (argGt.isSet())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -6,6 +6,7 @@
 #include <mrpt/opengl/CText.h>
 #include <mrpt/opengl/stock_objects.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
@@ -28,13 +29,36 @@ CWiFiBearingMap::TMapDefinition::TMapDefinition() = default;
 void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& prefix)
 {
-    transmittersFile = source.read_string(prefix + "_creationOpts", "transmitters_file", "");
+    const std::string sect = prefix + "_creationOpts";
+    transmittersFile = source.read_string(sect, "transmitters_file", "");
+    const char* keys[] = {"min_x", "max_x", "min_y", "max_y"};
+    size_t given = 0;
+    for (const char* k : keys) given += source.keyExists(sect, k) ? 1 : 0;
+    area.reset();
+    if (given == 4)
+    {
+        const auto rd = [&](const char* k) { return source.read_double(sect, k, 0, true); };
+        area = mrpt::math::TBoundingBox(
+            {rd("min_x"), rd("min_y"), 0}, {rd("max_x"), rd("max_y"), 0},
+            mrpt::math::TBoundingBox::CTOR_FLAGS::AllowUnordered);
+        if (!(area->max.x > area->min.x) || !(area->max.y > area->min.y))
+            throw std::invalid_argument(
+                "[" + sect + "] the area needs min_x < max_x and min_y < max_y");
+    }
+    else if (given != 0)
+        throw std::invalid_argument(
+            "[" + sect +
+            "] min_x, max_x, min_y, max_y: give all four (the area the robot can "
+            "be in) or none");
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
 }
 
 void CWiFiBearingMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const
 {
     out << "transmitters_file = " << transmittersFile << "\n";
+    if (area)
+        out << "min_x = " << area->min.x << "\nmax_x = " << area->max.x
+            << "\nmin_y = " << area->min.y << "\nmax_y = " << area->max.y << "\n";
     likelihoodOpts.dumpToTextStream(out);
 }
 
@@ -44,6 +68,7 @@ mrpt::maps::CMetricMap* CWiFiBearingMap::internal_CreateFromMapDefinition(
     const auto& def = dynamic_cast<const CWiFiBearingMap::TMapDefinition&>(_def);
     auto* map = new CWiFiBearingMap();
     map->likelihoodOptions = def.likelihoodOpts;
+    map->area_ = def.area;
     if (def.transmittersFile.empty())
     {
         delete map;
@@ -143,17 +168,20 @@ double CWiFiBearingMap::internal_computeObservationLikelihood(
         noteUnknown(obs, o.transmitter);
         return 0;
     }
-    BearingRecord r;
-    r.transmitter = o.transmitter;
-    r.sensorPose = mrpt::math::TPose2D(o.sensorPose.x(), o.sensorPose.y(), o.sensorPose.yaw());
-    r.hasAoa = true;
-    r.aoa = o.aoa_rad, r.aoaStd = o.aoaStd_rad;
-    r.aoaAmbiguous = o.aoaAmbiguous, r.aoaMirror = o.aoaMirror_rad;
-    r.hasAod = o.hasAod;
-    r.aod = o.aod_rad, r.aodStd = o.aodStd_rad;
-    r.aodAmbiguous = o.aodAmbiguous, r.aodMirror = o.aodMirror_rad;
+    if (!inArea(takenFrom.x(), takenFrom.y())) return kOutsideAreaLogLikelihood;
     const mrpt::math::TPose2D robot(takenFrom.x(), takenFrom.y(), takenFrom.yaw());
-    return recordLogLikelihood(r, robot, *tx, likelihoodOptions.model, likelihoodOptions.use);
+    return recordLogLikelihood(
+        recordFromObservation(o), robot, *tx, likelihoodOptions.model, likelihoodOptions.use);
+}
+
+std::optional<bool> CWiFiBearingMap::agrees(
+    const CObservationWiFiBearing& b, const mrpt::math::TPose2D& robot, double nSigma) const
+{
+    const KnownTransmitter* tx = transmitters_.find(b.transmitter);
+    if (!tx) return std::nullopt;
+    return recordAgrees(
+        recordFromObservation(b), robot, *tx, likelihoodOptions.model, likelihoodOptions.use,
+        nSigma);
 }
 
 void CWiFiBearingMap::saveMetricMapRepresentationToFile(const std::string& prefix) const
@@ -164,7 +192,16 @@ void CWiFiBearingMap::saveMetricMapRepresentationToFile(const std::string& prefi
 
 std::string CWiFiBearingMap::asString() const
 {
-    return "CWiFiBearingMap with " + std::to_string(transmitters_.size()) + " transmitters";
+    std::string s =
+        "CWiFiBearingMap with " + std::to_string(transmitters_.size()) + " transmitters";
+    if (area_)
+    {
+        std::ostringstream o;
+        o << ", area x " << area_->min.x << ".." << area_->max.x << " y " << area_->min.y << ".."
+          << area_->max.y << " m";
+        s += o.str();
+    }
+    return s;
 }
 
 void CWiFiBearingMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
@@ -184,7 +221,7 @@ void CWiFiBearingMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
 // ---------------------------------------------------------------- serialization
 uint8_t CWiFiBearingMap::serializeGetVersion() const
 {
-    return 0;
+    return 1;  // 1: the area
 }
 
 void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
@@ -194,6 +231,8 @@ void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
     out << m.outlierProb << m.minStd_rad << m.stdScale << m.maxStd_rad << likelihoodOptions.use.aoa
         << likelihoodOptions.use.aod;
     out << genericMapParams;
+    out << area_.has_value();
+    if (area_) out << area_->min.x << area_->max.x << area_->min.y << area_->max.y;
 }
 
 void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -201,6 +240,7 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
     switch (version)
     {
         case 0:
+        case 1:
         {
             std::string yaml;
             // A map of thousands of transmitters is well below 64 MB of YAML.
@@ -210,6 +250,15 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
             in >> m.outlierProb >> m.minStd_rad >> m.stdScale >> m.maxStd_rad >>
                 likelihoodOptions.use.aoa >> likelihoodOptions.use.aod;
             in >> genericMapParams;
+            area_.reset();
+            bool hasArea = false;
+            if (version >= 1) in >> hasArea;
+            if (hasArea)
+            {
+                mrpt::math::TBoundingBox b;
+                in >> b.min.x >> b.max.x >> b.min.y >> b.max.y;
+                area_ = b;
+            }
         }
         break;
         default:

@@ -14,41 +14,9 @@
 
 namespace mrpt_wifi::localization
 {
-mrpt::obs::CActionRobotMovement2D unknownMotionAction(
-    double dt_s, double maxSpeed_mps, double maxTurnRate_rps)
+CWiFiBearingMap::Ptr wifiMapFromIni(
+    const mrpt::config::CConfigFileBase& ini, const std::string& iniDir)
 {
-    // UnknownMotion's random walk (no constant-velocity prediction) with a 1 s horizon.
-    UnknownMotion m;
-    m.maxSpeed_mps = maxSpeed_mps;
-    m.maxTurnRate_dps = mrpt::RAD2DEG(maxTurnRate_rps);
-    m.correlationTime_s = 1.0;
-    m.maxStep_s = 5.0;
-    m.minStdXY_m = m.minStdPhi_deg = 0;
-    m.constantVelocity = false;
-    return *m.makeAction(std::max(dt_s, 1e-4));
-}
-
-void LiveLocalizerOptions::loadFromConfigFile(
-    const mrpt::config::CConfigFileBase& c, const std::string& s)
-{
-    unknownMotionSpeed_mps = c.read_double(s, "unknown_motion_speed_mps", unknownMotionSpeed_mps);
-    unknownMotionTurn_rps = mrpt::DEG2RAD(
-        c.read_double(s, "unknown_motion_turn_dps", mrpt::RAD2DEG(unknownMotionTurn_rps)));
-    const int maxPerStep = c.read_int(s, "max_bearings_per_step", int(maxBearingsPerStep));
-    if (!(unknownMotionSpeed_mps > 0) || !(unknownMotionTurn_rps > 0) || maxPerStep < 0)
-        throw std::invalid_argument(
-            "[" + s +
-            "] unknown_motion_speed_mps and unknown_motion_turn_dps must be > 0, "
-            "max_bearings_per_step >= 0");
-    maxBearingsPerStep = size_t(maxPerStep);
-}
-
-LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std::string& iniDir)
-{
-    opts_.loadFromConfigFile(ini, "wifi-localize");
-
-    // The map, as wifi-pf-localization builds it (relative transmitters_file: cwd, then iniDir).
-    const std::string mapSect = "MetricMap_wifiBearingMap_00_creationOpts";
     mrpt::maps::TSetOfMetricMapInitializers inits;
     inits.loadFromConfigFile(ini, "MetricMap");
     for (auto& i : inits)
@@ -59,14 +27,80 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
                 mrpt::system::fileExists(iniDir + "/" + f))
                 f = iniDir + "/" + f;
         }
-    map_->setListOfMaps(inits);
-    wifiMap_ = map_->mapByClass<CWiFiBearingMap>();
-    if (!wifiMap_)
+    mrpt::maps::CMultiMetricMap maps;
+    maps.setListOfMaps(inits);
+    auto wifiMap = maps.mapByClass<CWiFiBearingMap>();
+    if (!wifiMap)
         throw std::runtime_error(
             "the [MetricMap] section creates no wifiBearingMap (wifiBearingMap_count=1 missing?)");
-    if (wifiMap_->transmitters().empty())
+    if (wifiMap->transmitters().empty())
         throw std::runtime_error(
-            "the WiFi map has no transmitters: set transmitters_file in [" + mapSect + "]");
+            "the WiFi map has no transmitters: set transmitters_file in "
+            "[MetricMap_wifiBearingMap_00_creationOpts]");
+    return wifiMap;
+}
+
+std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConfigFileBase& ini)
+{
+    const std::string sect = "LocalizationExperiment";
+    if (ini.read_int(sect, "init_PDF_mode", 1) != 1) return std::nullopt;
+    for (const char* k : {"init_PDF_min_x", "init_PDF_max_x", "init_PDF_min_y", "init_PDF_max_y"})
+        if (!ini.keyExists(sect, k)) return std::nullopt;
+    const auto rd = [&](const char* k) { return ini.read_double(sect, k, 0); };
+    const mrpt::math::TBoundingBox box(
+        {rd("init_PDF_min_x"), rd("init_PDF_min_y"), 0},
+        {rd("init_PDF_max_x"), rd("init_PDF_max_y"), 0},
+        mrpt::math::TBoundingBox::CTOR_FLAGS::AllowUnordered);
+    if (!(box.max.x > box.min.x) || !(box.max.y > box.min.y)) return std::nullopt;
+    return box;
+}
+
+mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(
+    const mrpt::config::CConfigFileBase& ini)
+{
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions m;
+    m.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    m.gaussianModel.minStdXY =
+        ini.read_double("DummyOdometryParams", "minStdXY", m.gaussianModel.minStdXY);
+    m.gaussianModel.minStdPHI = mrpt::DEG2RAD(ini.read_double(
+        "DummyOdometryParams", "minStdPHI", mrpt::RAD2DEG(m.gaussianModel.minStdPHI)));
+    return m;
+}
+
+void LiveLocalizerOptions::loadFromConfigFile(
+    const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+    // The live filter's own random walk is gone: both filters read [UnknownMotion].
+    for (const char* k : {"unknown_motion_speed_mps", "unknown_motion_turn_dps"})
+        if (c.keyExists(s, k))
+            throw std::invalid_argument(
+                "[" + s + "] " + k +
+                " is no longer read: without odometry wifi-localize uses the [UnknownMotion] "
+                "section as wifi-pf-localization does (max_speed_mps, max_turn_rate_dps, ...)");
+    const int maxPerStep = c.read_int(s, "max_bearings_per_step", int(maxBearingsPerStep));
+    if (maxPerStep < 0)
+        throw std::invalid_argument("[" + s + "] max_bearings_per_step must be >= 0");
+    maxBearingsPerStep = size_t(maxPerStep);
+}
+
+LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std::string& iniDir)
+{
+    opts_.loadFromConfigFile(ini, "wifi-localize");
+
+    // The map, as wifi-pf-localization builds it (relative transmitters_file: cwd, then iniDir),
+    // bounded by the init_PDF box unless it sets its own area.
+    wifiMap_ = wifiMapFromIni(ini, iniDir);
+    if (!wifiMap_->area())
+        if (const auto box = initialPdfArea(ini); box)
+        {
+            wifiMap_->setArea(box);
+            areaFromInitPdf_ = true;
+        }
+    map_->maps.push_back(wifiMap_);
+    motion_.loadFromConfigFile(ini, "UnknownMotion");
+    cv_ = ConstantVelocityPrediction(motion_);
+    recoveryOptions_.loadFromConfigFile(ini, "ParticleRecovery");
+    recovery_.emplace(recoveryOptions_, wifiMap_.get());
 
     const std::string sect = "LocalizationExperiment";
     const int n = ini.read_int(sect, "particles_count", 0, true);
@@ -84,11 +118,7 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     pdf_.options.KLD_params.loadFromConfigFile(ini, "KLD_options");
     pf_.m_options.loadFromConfigFile(ini, "PF_options");
 
-    odoModel_.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
-    odoModel_.gaussianModel.minStdXY =
-        ini.read_double("DummyOdometryParams", "minStdXY", odoModel_.gaussianModel.minStdXY);
-    odoModel_.gaussianModel.minStdPHI = mrpt::DEG2RAD(ini.read_double(
-        "DummyOdometryParams", "minStdPHI", mrpt::RAD2DEG(odoModel_.gaussianModel.minStdPHI)));
+    odoModel_ = odometryMotionModel(ini);
 }
 
 void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
@@ -122,23 +152,30 @@ bool LiveLocalizer::step()
     const double t = mrpt::Clock::toDouble(pending_[n - 1]->timestamp);
     pending_.erase(pending_.begin(), pending_.begin() + long(n));
 
-    mrpt::obs::CActionCollection acts;
+    const double dt = steps_ ? t - lastStepTime_ : 0.0;
+    mrpt::obs::CActionRobotMovement2D act;
     if (lastOdo_ && odoAtLastStep_)
     {
         // n offline steps would each have added the noise floor: sqrt(n) times it once.
         auto model = odoModel_;
         model.gaussianModel.minStdXY *= std::sqrt(double(n));
         model.gaussianModel.minStdPHI *= std::sqrt(double(n));
-        mrpt::obs::CActionRobotMovement2D act;
         act.computeFromOdometry(*lastOdo_ - *odoAtLastStep_, model);
-        acts.insert(act);
         odoAtLastStep_ = lastOdo_;
     }
     else
-        acts.insert(unknownMotionAction(
-            steps_ ? t - lastStepTime_ : 0.0, opts_.unknownMotionSpeed_mps,
-            opts_.unknownMotionTurn_rps));
+        act = *motion_.makeAction(dt, cv_.predictIncrement(t));
+    for (const auto& o : sf)
+        recovery_->checkBearing(
+            mrpt::Clock::toDouble(o->timestamp), static_cast<const CObservationWiFiBearing&>(*o));
+    if (const double f = recovery_->reseedFraction(t, dt); f > 0)
+        act = withReseeding(act, f, recovery_->reseedRadius_m());
+    mrpt::obs::CActionCollection acts;
+    acts.insert(act);
     pf_.executeOn(pdf_, &acts, &sf);
+    const auto estimate = mean();
+    if (!lastOdo_) cv_.addEstimate(t, estimate);
+    recovery_->setEstimate(estimate);
     lastStepTime_ = t;
     ++steps_;
     bearingsUsed_ += n;

@@ -325,6 +325,11 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
          {"LocalizationExperiment/init_PDF_max_x", fmt(room.width, 3)},
          {"LocalizationExperiment/init_PDF_min_y", "0"},
          {"LocalizationExperiment/init_PDF_max_y", fmt(room.depth, 3)},
+         // the map's area: the room (the robot can't leave it)
+         {"MetricMap_wifiBearingMap_00_creationOpts/min_x", "0"},
+         {"MetricMap_wifiBearingMap_00_creationOpts/max_x", fmt(room.width, 3)},
+         {"MetricMap_wifiBearingMap_00_creationOpts/min_y", "0"},
+         {"MetricMap_wifiBearingMap_00_creationOpts/max_y", fmt(room.depth, 3)},
          {"KLD_options/KLD_minSampleSize", std::to_string(o.particles)},
          {"KLD_options/KLD_maxSampleSize", std::to_string(o.particles)}},
         {}, ini);

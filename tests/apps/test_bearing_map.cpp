@@ -8,10 +8,12 @@
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/ParticleRecovery.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 
 #include <fstream>
@@ -248,4 +250,149 @@ TEST(BearingMapParticleFilter, GlobalLocalizationConverges)
     const auto st = computeStats(late);
     EXPECT_LT(st.median, 0.3) << st.asString();
     EXPECT_LT(st.max, 1.0) << st.asString();
+}
+
+TEST(BearingMapArea, PosesOutsideTheAreaLoseTheirWeightAndTheAreaIsSaved)
+{
+    const auto aps = writeTemp("area_aps.yaml", kApsYaml);
+    const std::string sect = "[MetricMap_wifiBearingMap_00_creationOpts]\n";
+    auto m = mapFromIni(iniFor(aps) + sect + "min_x=0\nmax_x=10\nmin_y=0\nmax_y=5\n");
+    auto map = m.mapByClass<CWiFiBearingMap>();
+    ASSERT_TRUE(map && map->area());
+    EXPECT_TRUE(map->inArea(9.9, 4.9));
+    EXPECT_FALSE(map->inArea(10.1, 2));
+    EXPECT_FALSE(map->inArea(5, -0.1));
+    // A bearing that fits a pose just outside perfectly still scores the outside floor there.
+    const auto& ap = map->transmitters().at(0);
+    const mrpt::math::TPose2D outside(10.2, 2, 0.3);
+    BearingRecord r;
+    r.t = 1, r.transmitter = ap.mac, r.hasAoa = true, r.aoaStd = 0.05;
+    const auto s = sensorWorldPose(outside, r.sensorPose);
+    r.aoa = predictAoa(s, ap.pose.x, ap.pose.y);
+    const auto obs = observationFromRecord(r);
+    EXPECT_EQ(
+        map->computeObservationLikelihood(
+            *obs, mrpt::poses::CPose3D(outside.x, outside.y, 0, 0.3, 0, 0)),
+        CWiFiBearingMap::kOutsideAreaLogLikelihood);
+    EXPECT_GT(
+        map->computeObservationLikelihood(*obs, mrpt::poses::CPose3D(9.8, 2, 0, 0.3, 0, 0)),
+        CWiFiBearingMap::kOutsideAreaLogLikelihood + 20);
+    EXPECT_TRUE(map->agrees(*obs, outside).value_or(false));
+    EXPECT_FALSE(map->agrees(*obs, {outside.x, outside.y, outside.phi + 0.5}).value_or(true));
+
+    // Serialized (a map in a rawlog or .simplemap) with its area.
+    mrpt::io::CMemoryStream buf;
+    mrpt::serialization::archiveFrom(buf) << *map;
+    buf.Seek(0);
+    CWiFiBearingMap back;
+    mrpt::serialization::archiveFrom(buf) >> back;
+    ASSERT_TRUE(back.area());
+    EXPECT_EQ(back.area()->max.x, 10.0);
+    EXPECT_EQ(back.area()->max.y, 5.0);
+
+    // Three of the four keys, or an empty box: an error naming the keys.
+    for (const std::string bad :
+         {"min_x=0\nmax_x=10\nmin_y=0\n", "min_x=3\nmax_x=3\nmin_y=0\nmax_y=5\n"})
+    {
+        try
+        {
+            mapFromIni(iniFor(aps) + sect + bad);
+            ADD_FAILURE() << "accepted " << bad;
+        }
+        catch (const std::exception& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("min_x"), std::string::npos) << e.what();
+        }
+    }
+}
+
+TEST(ParticleRecovery, ReseedsOnlyWhileMostBearingsDisagreeWithTheEstimate)
+{
+    CWiFiBearingMap map;
+    map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
+    map.setArea(mrpt::math::TBoundingBox({0, 0, 0}, {10, 5, 0}));
+    const mrpt::math::TPose2D robot(4, 2, 0.3);
+    const auto bearingsAt = [&](double t)
+    {
+        std::vector<CObservationWiFiBearing::Ptr> out;
+        for (const auto& ap : map.transmitters().transmitters())
+        {
+            BearingRecord r;
+            r.t = t, r.transmitter = ap.mac, r.hasAoa = true, r.aoaStd = 0.05;
+            r.aoa = predictAoa(sensorWorldPose(robot, r.sensorPose), ap.pose.x, ap.pose.y);
+            out.push_back(observationFromRecord(r));
+        }
+        return out;
+    };
+    const auto feed = [&](ParticleRecovery& rec, const mrpt::math::TPose2D& estimate)
+    {
+        double fraction = 0;
+        rec.setEstimate(estimate);
+        for (int k = 0; k < 40; ++k)  // 4 s of steps at 10/s
+        {
+            const double t = 0.1 * k;
+            for (const auto& b : bearingsAt(t)) rec.checkBearing(t, *b);
+            fraction = rec.reseedFraction(t, 0.1);
+        }
+        return fraction;
+    };
+    ParticleRecoveryOptions o;  // 1/s, 2 s window, half must agree
+    ParticleRecovery agreeing(o, &map);
+    EXPECT_EQ(feed(agreeing, {4.05, 2.0, 0.3}), 0.0);
+    EXPECT_EQ(agreeing.recoveryEpisodes(), 0u);
+    ParticleRecovery lost(o, &map);
+    EXPECT_NEAR(feed(lost, {8, 4, -2}), 1 - std::exp(-0.1), 1e-9);
+    EXPECT_EQ(lost.recoveryEpisodes(), 1u);
+    EXPECT_NEAR(lost.reseedRadius_m(), std::hypot(10.0, 5.0), 1e-9);
+    // An estimate outside the area disagrees with everything.
+    ParticleRecovery outside(o, &map);
+    EXPECT_GT(feed(outside, {10.5, 2, 0.3}), 0.0);
+    // No area, no recovery (nowhere to re-seed).
+    CWiFiBearingMap unbounded;
+    unbounded.setTransmitters(map.transmitters());
+    ParticleRecovery noArea(o, &unbounded);
+    EXPECT_EQ(feed(noArea, {8, 4, -2}), 0.0);
+    // Bad options name the key.
+    mrpt::config::CConfigFileMemory bad("[ParticleRecovery]\nmin_agreement = 1.5\n");
+    try
+    {
+        o.loadFromConfigFile(bad, "ParticleRecovery");
+        ADD_FAILURE() << "accepted min_agreement = 1.5";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("min_agreement"), std::string::npos);
+    }
+}
+
+TEST(ParticleRecovery, ReseedingJumpsCoverTheAreaUniformly)
+{
+    // The action keeps (1 - f) of its own motion; f of it jumps uniformly within the disc whose
+    // radius is the area's diagonal, with any heading.
+    mrpt::obs::CActionRobotMovement2D::TMotionModelOptions mm;
+    mm.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
+    mrpt::obs::CActionRobotMovement2D odo;
+    odo.computeFromOdometry(mrpt::poses::CPose2D(0.05, 0, 0), mm);
+    const double radius = std::hypot(10.0, 5.0);
+    const auto a = withReseeding(odo, 0.2, radius);
+    const auto* pdf = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(a.poseChange.get());
+    ASSERT_NE(pdf, nullptr);
+    size_t jumps = 0, farOut = 0, inOuterHalf = 0;
+    for (const auto& p : pdf->m_particles)
+    {
+        const double d = std::hypot(p.d.x, p.d.y);
+        if (d > 1.0)
+        {
+            ++jumps;
+            inOuterHalf += d > radius / std::sqrt(2.0) ? 1 : 0;  // half the disc's area
+        }
+        farOut += d > radius + 1e-9 ? 1 : 0;
+    }
+    EXPECT_NEAR(double(jumps) / double(pdf->size()), 0.2 * (1 - 1.0 / (radius * radius)), 0.02);
+    EXPECT_EQ(farOut, 0u);
+    EXPECT_NEAR(double(inOuterHalf) / double(jumps), 0.5, 0.1);
+    // No re-seeding: the action untouched.
+    EXPECT_EQ(
+        withReseeding(odo, 0.0, radius).poseChange.get()->GetRuntimeClass(),
+        odo.poseChange.get()->GetRuntimeClass());
 }

@@ -6,6 +6,7 @@
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
 #include <cmath>
+#include <optional>
 
 namespace mrpt_wifi::localization
 {
@@ -73,5 +74,12 @@ struct BearingUse
 double recordLogLikelihood(
     const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
     const RobustBearingModel& model, const BearingUse& use);
+
+/** Whether a record agrees with a robot pose: every angle the model uses (as
+ *  recordLogLikelihood() selects them) within `nSigma` effective σ of its prediction (either
+ *  member of an ambiguous pair). std::nullopt when no angle is used. */
+std::optional<bool> recordAgrees(
+    const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
+    const RobustBearingModel& model, const BearingUse& use, double nSigma = 3.0);
 
 }  // namespace mrpt_wifi::localization

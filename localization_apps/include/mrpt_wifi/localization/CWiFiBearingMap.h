@@ -3,11 +3,14 @@
 
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/maps/CMetricMap.h>
+#include <mrpt/math/TBoundingBox.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 
 namespace mrpt_wifi
@@ -25,6 +28,11 @@ namespace mrpt_wifi
  *
  * [MetricMap_wifiBearingMap_00_creationOpts]
  * transmitters_file = /path/to/transmitters.yaml   ; see TransmitterMap (YAML)
+ * ; optional: the area the robot can be in (all four or none)
+ * min_x = 0
+ * max_x = 10
+ * min_y = 0
+ * max_y = 5
  *
  * [MetricMap_wifiBearingMap_00_likelihoodOpts]
  * use_aoa = true
@@ -35,6 +43,10 @@ namespace mrpt_wifi
  * max_std_deg = 45
  * \endcode
  * The map is read-only: inserting observations does nothing (it is built from the file).
+ *
+ * With an area, a pose outside it scores kOutsideAreaLogLikelihood per bearing whatever the
+ * bearings say: a particle filter's particles that leave the building lose their weight at the
+ * next step and are not resampled (the robot can't be there).
  */
 class CWiFiBearingMap : public mrpt::maps::CMetricMap
 {
@@ -59,6 +71,24 @@ public:
     /** Loads the transmitters from a YAML file (throws with the file and reason). */
     void loadTransmitters(const std::string& yamlFile);
 
+    /** The area the robot can be in (x and y of the box; z unused), or none (unbounded). */
+    void setArea(const std::optional<mrpt::math::TBoundingBox>& area) { area_ = area; }
+    const std::optional<mrpt::math::TBoundingBox>& area() const { return area_; }
+    bool inArea(double x, double y) const
+    {
+        return !area_ ||
+               (x >= area_->min.x && x <= area_->max.x && y >= area_->min.y && y <= area_->max.y);
+    }
+    /** Log-likelihood of one bearing seen from a pose outside the area: e^-30, far below any
+     *  bearing's own (the robust model's outlier floor is ≈ log(0.1/2π) = −4.1). */
+    static constexpr double kOutsideAreaLogLikelihood = -30.0;
+
+    /** Whether a bearing agrees with a robot pose (localization::recordAgrees with this map's
+     *  model; within `nSigma` σ); nullopt for an unknown transmitter or no usable angle. */
+    std::optional<bool> agrees(
+        const CObservationWiFiBearing& b, const mrpt::math::TPose2D& robot,
+        double nSigma = 3.0) const;
+
     /** Observations whose transmitter isn't in the map (counted once per observation object
      *  and MAC seen, not per particle) and the MACs involved. */
     size_t unknownTransmitterCount() const;
@@ -72,11 +102,14 @@ public:
 
     MAP_DEFINITION_START(CWiFiBearingMap)
     std::string transmittersFile;  //!< `transmitters_file` in `..._creationOpts`
+    /** `min_x`, `max_x`, `min_y`, `max_y` in `..._creationOpts` (all four or none) */
+    std::optional<mrpt::math::TBoundingBox> area;
     CWiFiBearingMap::TLikelihoodOptions likelihoodOpts;
     MAP_DEFINITION_END(CWiFiBearingMap)
 
 private:
     localization::TransmitterMap transmitters_;
+    std::optional<mrpt::math::TBoundingBox> area_;
     /** Bookkeeping of unknown transmitters, shared so the map stays copyable (clone()). */
     struct UnknownLog
     {

@@ -10,6 +10,8 @@
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
+#include <mrpt_wifi/localization/ParticleRecovery.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <optional>
@@ -18,21 +20,26 @@
 
 namespace mrpt_wifi::localization
 {
-/** Motion of a robot whose odometry is unknown, for MRPT's particle filter: UnknownMotion's
- *  zero-mean random walk with a 1 s horizon, std `maxSpeed · sqrt(dt · 1 s)` in x and y and
- *  `maxTurnRate · sqrt(dt · 1 s)` in yaw (variance linear in time, so the spread does not depend
- *  on how often the filter steps; after one second it is the speed bound). */
-mrpt::obs::CActionRobotMovement2D unknownMotionAction(
-    double dt_s, double maxSpeed_mps, double maxTurnRate_rps);
+/** The first wifiBearingMap an .ini's `[MetricMap]` creates, as MRPT's apps build it; a
+ *  relative transmitters_file not found from the working directory is taken relative to
+ *  `iniDir`. Throws naming the problem (no such map, no transmitters). */
+CWiFiBearingMap::Ptr wifiMapFromIni(
+    const mrpt::config::CConfigFileBase& ini, const std::string& iniDir);
+
+/** The box `[LocalizationExperiment] init_PDF_min/max_x/y` of a uniform initial distribution
+ *  (init_PDF_mode = 1): where a kidnapped robot can be, the map's area when the map sets none. */
+std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConfigFileBase& ini);
+
+/** MRPT's Gaussian odometry model as its pf-localization configures it for observation-only
+ *  rawlogs: `[DummyOdometryParams] minStdXY` [m] and `minStdPHI` [deg] floors. */
+mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(
+    const mrpt::config::CConfigFileBase& ini);
 
 /** Options of the live filter that the pf-localization .ini does not have: section
- *  `[wifi-localize]` of the same file (all optional). */
+ *  `[wifi-localize]` of the same file (all optional). Without odometry the motion model is the
+ *  file's `[UnknownMotion]`, as for wifi-pf-localization. */
 struct LiveLocalizerOptions
 {
-    /** `unknown_motion_speed_mps`, `unknown_motion_turn_dps`: bounds of the motion model when
-     *  there is no odometry. */
-    double unknownMotionSpeed_mps = 1.0;
-    double unknownMotionTurn_rps = mrpt::DEG2RAD(90.0);
     /** `max_bearings_per_step`: observations per filter step (sensory frame); 0 (default):
      *  all that are queued. 1 is what the offline wifi-pf-localization does (one step per
      *  bearing); a step of n bearings applies the odometry noise floor × sqrt(n), the spread n
@@ -50,8 +57,11 @@ struct LiveLocalizerOptions
  *  [KLD_options], [DummyOdometryParams], [MetricMap]). Odometry readings accumulate; each
  *  step() takes the bearings queued since the last one (up to max_bearings_per_step) as one
  *  sensory frame, with the odometry increment since the last step as the action (Gaussian
- *  model with the DummyOdometryParams floor, as MRPT's app does), or unknownMotionAction()
- *  while no odometry has been seen. Not thread-safe. */
+ *  model with the DummyOdometryParams floor, as MRPT's app does), or, while no odometry has been
+ *  seen, the `[UnknownMotion]` model around the constant-velocity prediction from this filter's
+ *  own estimates; either way `[ParticleRecovery]` re-seeds particles while the bearings disagree
+ *  with the estimate: the same models as wifi-pf-localization. The map's area is the init_PDF
+ *  box unless its creationOpts set one. Not thread-safe. */
 class LiveLocalizer
 {
 public:
@@ -79,6 +89,11 @@ public:
 
     const mrpt::slam::CMonteCarloLocalization2D& particles() const { return pdf_; }
     const CWiFiBearingMap& wifiMap() const { return *wifiMap_; }
+    const UnknownMotion& unknownMotion() const { return motion_; }
+    const ParticleRecoveryOptions& recoveryOptions() const { return recoveryOptions_; }
+    const ParticleRecovery& recovery() const { return *recovery_; }
+    /** Whether the map's area came from the init_PDF box (the map's creationOpts set none). */
+    bool areaFromInitialPdf() const { return areaFromInitPdf_; }
 
 private:
     LiveLocalizerOptions opts_;
@@ -89,6 +104,11 @@ private:
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     std::vector<CObservationWiFiBearing::Ptr> pending_;
+    UnknownMotion motion_;
+    ConstantVelocityPrediction cv_{motion_};
+    ParticleRecoveryOptions recoveryOptions_;
+    std::optional<ParticleRecovery> recovery_;
+    bool areaFromInitPdf_ = false;
     double lastStepTime_ = 0;
     size_t steps_ = 0;
     uint64_t bearingsUsed_ = 0, unknown_ = 0;
