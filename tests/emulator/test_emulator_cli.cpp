@@ -183,7 +183,13 @@ TEST(EmulatorCli, ShimLinksDriveTheRunningEmulator)
     r = run(shell("sh -c '" + setup + "'"));
     EXPECT_EQ(r.exitCode, 0) << r.output;
     std::this_thread::sleep_for(std::chrono::milliseconds(400));
-    EXPECT_GT(rx.count(), 50u);
+    // CSI flows, and nothing arrives that the emulator did not send (no fixed count: how much
+    // it sends in 400 ms depends on how busy the machine is).
+    const size_t received = rx.count();
+    const auto sentSoFar =
+        test::jsonCounter(run(shell(bin + "emulator-ctl status")).output, "datagrams_sent");
+    EXPECT_GT(received, 0u);
+    EXPECT_LE(received, sentSoFar);
 
     // Transmitter mode as the driver runs it: a bounded beacon loop with BusyBox's usleep.
     const std::vector<uint8_t> beacon(50, 0x80);
@@ -222,7 +228,11 @@ TEST(EmulatorCli, SigtermStopsWithASummaryAndDurationBoundsTheRun)
         ::kill(emu.pid(), SIGTERM);
         EXPECT_EQ(emu.wait(5), 0);
         EXPECT_NE(emu.out().find("\"datagrams_sent\": "), std::string::npos) << emu.out();
-        EXPECT_GT(test::jsonCounter(emu.out(), "datagrams_sent"), 20u);
+        // Everything it says it sent arrived (loopback), however much that was.
+        const auto sent = test::jsonCounter(emu.out(), "datagrams_sent");
+        EXPECT_GT(sent, 0u);
+        rx.waitQuiet();
+        EXPECT_EQ(rx.count(), sent);
     }
     const auto t0 = test::Clock::now();
     const auto r =
