@@ -45,6 +45,7 @@
 #include <deque>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -674,6 +675,7 @@ int main(int argc, char** argv)
             // pose output; also called between observations of a long batch, so a busy
             // bearing chain can't hold the estimate back.
             auto lastOutput = Clock::now();
+            long long lastOutputStamp_us = std::numeric_limits<long long>::min();
             const auto filterAndOutput = [&]() -> bool
             {
                 bool stepped = false;
@@ -685,6 +687,11 @@ int main(int argc, char** argv)
                 if (!stepped) return false;
                 const auto m = loc.mean();
                 const double t = loc.lastStepTime();
+                // A bearing that arrived late (older than the last output) refines the filter
+                // but gives no newer pose: the trajectory stays strictly increasing in time, as
+                // TUM readers expect.
+                if (std::llround(t * 1e6) <= lastOutputStamp_us) return true;
+                lastOutputStamp_us = std::llround(t * 1e6);
                 lags.push_back(nowUnix() - t);
                 ++poseOutputs;
                 ++secPoses;

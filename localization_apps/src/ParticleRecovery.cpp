@@ -1,4 +1,5 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/core/bits_math.h>
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt/random/RandomGenerators.h>
@@ -17,10 +18,12 @@ void ParticleRecoveryOptions::loadFromConfigFile(
     rate_hz = c.read_double(s, "rate_hz", rate_hz);
     window_s = c.read_double(s, "window_s", window_s);
     minAgreement = c.read_double(s, "min_agreement", minAgreement);
+    maxStd_deg = c.read_double(s, "max_std_deg", maxStd_deg);
     if (!(rate_hz >= 0) || !std::isfinite(rate_hz))
         throw std::invalid_argument("[" + s + "] rate_hz must be >= 0");
     if (!(window_s > 0) || !std::isfinite(window_s))
         throw std::invalid_argument("[" + s + "] window_s must be > 0");
+    if (!(maxStd_deg > 0)) throw std::invalid_argument("[" + s + "] max_std_deg must be > 0");
     if (!(minAgreement >= 0 && minAgreement <= 1))
         throw std::invalid_argument("[" + s + "] min_agreement must be in [0, 1]");
 }
@@ -30,7 +33,7 @@ std::string ParticleRecoveryOptions::asString() const
     if (!(rate_hz > 0)) return "off";
     std::ostringstream o;
     o << "re-seeding at " << rate_hz << "/s while under " << 100 * minAgreement << " % of the last "
-      << window_s << " s of bearings agree with the estimate";
+      << window_s << " s of bearings (sigma <= " << maxStd_deg << " deg) agree with the estimate";
     return o.str();
 }
 
@@ -49,6 +52,12 @@ void ParticleRecovery::reset()
 void ParticleRecovery::checkBearing(double t_s, const CObservationWiFiBearing& b)
 {
     if (!map_ || !estimate_ || !(o_.rate_hz > 0)) return;
+    // Only sharp bearings tell a lost filter: judge each angle the map uses by its own σ.
+    const double maxStd = mrpt::DEG2RAD(o_.maxStd_deg);
+    const auto& use = map_->likelihoodOptions.use;
+    const bool sharp =
+        (use.aoa && b.aoaStd_rad <= maxStd) || (use.aod && b.hasAod && b.aodStd_rad <= maxStd);
+    if (!sharp) return;
     const auto& e = *estimate_;
     // An estimate outside the area disagrees with every bearing.
     const auto agrees = map_->inArea(e.x, e.y) ? map_->agrees(b, e) : std::optional<bool>(false);

@@ -144,6 +144,10 @@ mrpt::poses::CPose2D ConstantVelocityPrediction::predictIncrement(double t_s) co
     const double dt = std::clamp(t_s - tb, 0.0, m_.maxStep_s);
     const double c = std::cos(b.phi), s = std::sin(b.phi);
     double dx = (c * vx + s * vy) * dt, dy = m_.forwardOnly ? 0.0 : (-s * vx + c * vy) * dt;
+    // A robot that drives along its heading drives forwards: an estimate moving against its own
+    // heading is the mirror of the truth (a linear array's front/back ambiguity), not a robot
+    // reversing, and predicting it would only hold the filter there.
+    if (m_.forwardOnly) dx = std::max(dx, 0.0);
     const double d = std::hypot(dx, dy), dMax = m_.maxSpeed_mps * dt;
     if (d > dMax) dx *= dMax / d, dy *= dMax / d;
     const double wMax = mrpt::DEG2RAD(m_.maxTurnRate_dps);

@@ -506,6 +506,22 @@ void drawOdometryErrors(Room& room)
     room.yawDrift_deg_per_m = sign() * rng.drawUniform(0.1, 0.6);
 }
 
+/** A case study that fails with an error costs that case in that room, not the sweep: the
+ *  error is recorded with the room (and listed with it) and the others go on. */
+void guarded(Room& room, const std::string& what, const std::function<void()>& run)
+{
+    try
+    {
+        run();
+    }
+    catch (const std::exception& e)
+    {
+        room.errors.push_back(what + ": " + e.what());
+        std::cerr << "\n[localization-accuracy] room " << room.seed << ", " << what << ": "
+                  << e.what() << "\n";
+    }
+}
+
 Room evaluateRoom(uint32_t seed, const Options& o)
 {
     const auto wall0 = std::chrono::steady_clock::now();
@@ -553,11 +569,11 @@ Room evaluateRoom(uint32_t seed, const Options& o)
             (dir / "kidnapped/bearings.csv").string(),
             (dir / "kidnapped/truth/frames.csv").string(), rx, bearingErrors);
         std::cerr << ", offline PF" << std::flush;
-        runOffline(room, dir, o);
+        guarded(room, "offline PF", [&] { runOffline(room, dir, o); });
         if (o.live)
         {
             std::cerr << ", live" << std::flush;
-            runLive(room, dir, calib, o);
+            guarded(room, "live", [&] { runLive(room, dir, calib, o); });
         }
     }
     const size_t kidnappedBearings = bearingErrors.size();
@@ -572,7 +588,7 @@ Room evaluateRoom(uint32_t seed, const Options& o)
             (dir / "loop/bearings.csv").string(), (dir / "loop/truth/frames.csv").string(), rx,
             bearingErrors);
         std::cerr << ", graph SLAM, device map" << std::flush;
-        runLoop(room, dir);
+        guarded(room, "graph SLAM / device map", [&] { runLoop(room, dir); });
     }
     room.bearings = BearingFigures::of(bearingErrors);
     room.bearingsOfDrive[1] = BearingFigures::of(std::vector<test::ErrorRecord>(

@@ -25,6 +25,9 @@ struct ParticleRecoveryOptions
     /** `min_agreement`: recovering while fewer than this share of the window's bearings lie
      *  within 3σ of the estimate (a handful disagree by chance: outliers, multipath). */
     double minAgreement = 0.5;
+    /** `max_std_deg`: only bearings this sharp (reported σ) are judged: a wide one agrees with
+     *  almost any pose and would hide a lost filter. */
+    double maxStd_deg = 10.0;
 
     /** Missing keys keep their value; throws std::invalid_argument naming a bad one. */
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
