@@ -10,6 +10,64 @@
 
 namespace mrpt_wifi
 {
+namespace
+{
+/** |Σ_k z_k·e^{j·2π·Δf·k·τ}|², with e^{j·w·k} by recurrence along consecutive subcarriers. */
+double crossSpectrumPower(const Eigen::VectorXcd& z, const std::vector<int>& k, double tau_s)
+{
+    const double w = 2 * M_PI * kSubcarrierSpacingHz * tau_s;
+    const std::complex<double> step = std::polar(1.0, w);
+    std::complex<double> rot = std::polar(1.0, w * k[0]), acc{0, 0};
+    for (Eigen::Index j = 0; j < z.size(); ++j)
+    {
+        if (j > 0)
+            rot = k[size_t(j)] - k[size_t(j - 1)] == 1 ? rot * step
+                                                       : std::polar(1.0, w * k[size_t(j)]);
+        acc += z(j) * rot;
+    }
+    return std::norm(acc);
+}
+
+/** The highest point of the cross-spectrum power on a grid `from`, `from + step`, ... (n
+ *  points), refined by a parabola through it and its neighbours. */
+double peakOnGrid(
+    const Eigen::VectorXcd& z, const std::vector<int>& k, double from_s, double step_s, int n,
+    double* peakPower = nullptr)
+{
+    std::vector<double> power(static_cast<size_t>(n));
+    for (int g = 0; g < n; ++g) power[size_t(g)] = crossSpectrumPower(z, k, from_s + g * step_s);
+    const size_t best = size_t(std::max_element(power.begin(), power.end()) - power.begin());
+    double offset = 0;
+    if (best > 0 && best + 1 < power.size())
+    {
+        const double a = power[best - 1], b = power[best], c = power[best + 1];
+        const double den = a - 2 * b + c;
+        if (den < 0) offset = std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+    }
+    if (peakPower) *peakPower = power[best];
+    return from_s + (double(best) + offset) * step_s;
+}
+
+/** The inter-chain delay from the cross spectrum z_k = Σ_m h_{m,i}(k)·h_{m,0}(k)^*, starting
+ *  from the phase-slope estimate `slopeDelay_s`. Where that estimate sits on a strong lobe of
+ *  the delay profile |Σ_k z_k·e^{j2π·Δf·k·τ}| (at least half the global peak within ±25 ns),
+ *  the lobe's own peak near it (±3 ns) refines it: the slope's centroid stays with the main
+ *  path under multipath, the peak adds precision. Otherwise (low SNR: the neighbouring
+ *  products are too noisy for the slope, which then strays by several ns) the global peak,
+ *  where all subcarriers add coherently. */
+double crossSpectrumDelay(
+    const Eigen::MatrixXcf& products, const std::vector<int>& k, double slopeDelay_s)
+{
+    const Eigen::VectorXcd z = products.cast<std::complex<double>>().colwise().sum().transpose();
+    double globalPower = 0;
+    const double global = peakOnGrid(z, k, -25e-9, 1e-9, 51, &globalPower);
+    if (std::abs(slopeDelay_s) < 25e-9 &&
+        crossSpectrumPower(z, k, slopeDelay_s) >= 0.5 * globalPower)
+        return peakOnGrid(z, k, slopeDelay_s - 3e-9, 0.5e-9, 13);
+    return global;
+}
+}  // namespace
+
 void measureChainDelays(
     const Eigen::Ref<const Eigen::MatrixXcf>& H, unsigned nRx, const std::vector<int>& k,
     std::vector<double>& delays_s, std::vector<double>& coherence)
@@ -37,6 +95,12 @@ void measureChainDelays(
         const double slope = CsiPreprocessor::estimatePhaseSlope(products, k);
         delays_s[i] = -slope / (2 * M_PI * kSubcarrierSpacingHz);
         coherence[i] = magnitude > 0 ? std::abs(acc) / magnitude : 0.0;
+        // Strong signals (coherence ≥ 0.97, about 20 dB and up) keep the phase slope, which
+        // stays with the main path under multipath; weaker ones (0.83–0.93 at 10 dB) take the
+        // cross spectrum's delay profile, where the slope strays by several ns.
+        constexpr double kSlopeCoherence = 0.97;
+        if (coherence[i] < kSlopeCoherence)
+            delays_s[i] = crossSpectrumDelay(products, k, delays_s[i]);
     }
 }
 
