@@ -133,6 +133,28 @@ TEST(ChainStates, DetectedOnSimulatedFramesWithKnownStates)
     }
 }
 
+TEST(ChainStates, WeakLinksAreStillClassified)
+{
+    // Issue 21 at 10 dB: the neighbouring-subcarrier phase slope strays by several ns and almost
+    // no frame got a state (21 bearings of 4488 in the evaluation rooms); the cross spectrum's
+    // delay profile classifies most of them. Here without a calibration (states discovered from
+    // scratch, the hard case): measured 78 % / 96 % of chain-frames classified, 82 % / 80 % of
+    // those in the right state (development seeds 3 / 7, 0.2 Hz); with the states known from a
+    // calibration the bearings hold (README: jump-state table).
+    for (uint32_t seed : {3u, 7u})
+    {
+        auto sc = jumpyRoom(seed, 0.2, 20);
+        sc.impairments.fixedSnr_dB = 10;
+        const Detection d = detect(sc);
+        std::cout << "seed " << seed << " at 10 dB: " << d.frames << " chain-frames, " << d.agree
+                  << " agree, " << d.unknown << " unknown, true changes " << d.trueChanges
+                  << ", detected " << d.detectedChanges << "\n";
+        ASSERT_GT(d.frames, 1000u);
+        EXPECT_LE(double(d.unknown), 0.3 * double(d.frames)) << "seed " << seed;
+        EXPECT_GE(double(d.agree), 0.75 * double(d.frames - d.unknown)) << "seed " << seed;
+    }
+}
+
 TEST(ChainStates, NoStateChangeWithoutJumps)
 {
     for (uint32_t seed : {3u, 7u})
