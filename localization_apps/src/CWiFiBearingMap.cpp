@@ -35,21 +35,21 @@ void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
     size_t given = 0;
     for (const char* k : keys) given += source.keyExists(sect, k) ? 1 : 0;
     area.reset();
+    areaError.clear();
+    // Errors wait for the map's creation: MRPT's loader leaks a definition that throws here.
     if (given == 4)
     {
-        const auto rd = [&](const char* k) { return source.read_double(sect, k, 0, true); };
+        const auto rd = [&](const char* k) { return source.read_double(sect, k, 0); };
         area = mrpt::math::TBoundingBox(
             {rd("min_x"), rd("min_y"), 0}, {rd("max_x"), rd("max_y"), 0},
             mrpt::math::TBoundingBox::CTOR_FLAGS::AllowUnordered);
         if (!(area->max.x > area->min.x) || !(area->max.y > area->min.y))
-            throw std::invalid_argument(
-                "[" + sect + "] the area needs min_x < max_x and min_y < max_y");
+            areaError = "[" + sect + "] the area needs min_x < max_x and min_y < max_y";
     }
     else if (given != 0)
-        throw std::invalid_argument(
-            "[" + sect +
-            "] min_x, max_x, min_y, max_y: give all four (the area the robot can "
-            "be in) or none");
+        areaError = "[" + sect +
+                    "] min_x, max_x, min_y, max_y: give all four (the area the robot can be in) "
+                    "or none";
     likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
 }
 
@@ -69,6 +69,11 @@ mrpt::maps::CMetricMap* CWiFiBearingMap::internal_CreateFromMapDefinition(
     auto* map = new CWiFiBearingMap();
     map->likelihoodOptions = def.likelihoodOpts;
     map->area_ = def.area;
+    if (!def.areaError.empty())
+    {
+        delete map;
+        throw std::invalid_argument(def.areaError);
+    }
     if (def.transmittersFile.empty())
     {
         delete map;

@@ -104,6 +104,7 @@ public:
     std::string transmittersFile;  //!< `transmitters_file` in `..._creationOpts`
     /** `min_x`, `max_x`, `min_y`, `max_y` in `..._creationOpts` (all four or none) */
     std::optional<mrpt::math::TBoundingBox> area;
+    std::string areaError;  //!< a malformed area, reported when the map is created
     CWiFiBearingMap::TLikelihoodOptions likelihoodOpts;
     MAP_DEFINITION_END(CWiFiBearingMap)
 
