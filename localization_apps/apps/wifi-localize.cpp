@@ -898,15 +898,8 @@ int main(int argc, char** argv)
                 << "\n"
                 << "  recovery       : " << loc.recoveryOptions().asString() << ": "
                 << recoverySummary(loc.recovery()) << "\n";
-            if (const auto& a = loc.wifiMap().area(); a)
-            {
-                const auto outside = std::count_if(
-                    est.poses.begin(), est.poses.end(),
-                    [&](const auto& p) { return !loc.wifiMap().inArea(p.x, p.y); });
-                sum << "  area           : x " << fmt(a->min.x, 2) << ".." << fmt(a->max.x, 2)
-                    << " y " << fmt(a->min.y, 2) << ".." << fmt(a->max.y, 2) << " m, " << outside
-                    << " estimates outside it\n";
-            }
+            if (const auto area = areaSummary(loc.wifiMap(), est.poses); !area.empty())
+                sum << "  area           : " << area << "\n";
             if (argGt.isSet() && !est.empty())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -10,14 +10,13 @@
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/vector_loadsave.h>
-#include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt/system/CTicTac.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
-#include <mrpt_wifi/localization/LiveLocalizer.h>  // initialPdfArea
+#include <mrpt_wifi/localization/LiveLocalizer.h>  // wifiMapFromIni, boundByInitialPdf
 #include <mrpt_wifi/localization/ParticleRecovery.h>
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
@@ -295,26 +294,20 @@ int main(int argc, char** argv)
                 if (mrpt::system::fileExists(alt)) txFile = alt;
             }
             if (!txFile.empty()) ini.write(mapSect, "transmitters_file", txFile);
-            mrpt::maps::TSetOfMetricMapInitializers mapInits;
-            mapInits.loadFromConfigFile(ini, "MetricMap");
-            mrpt::maps::CMultiMetricMap probe;
-            probe.setListOfMaps(mapInits);
-            const auto wifiMap = probe.mapByClass<CWiFiBearingMap>();
-            if (!wifiMap)
-                throw std::runtime_error(
-                    argIni.getValue() +
-                    ": the [MetricMap] section creates no wifiBearingMap (wifiBearingMap_count=1 "
-                    "missing?)");
+            CWiFiBearingMap::Ptr wifiMap;
+            try
+            {
+                wifiMap =
+                    wifiMapFromIni(ini, mrpt::system::extractFileDirectory(argIni.getValue()));
+            }
+            catch (const std::exception& e)
+            {
+                throw std::runtime_error(argIni.getValue() + ": " + e.what());
+            }
             const auto& txs = wifiMap->transmitters();
             // The robot can't leave the building: without an area of its own the map is bounded
             // by the init_PDF box (where the kidnapped robot may be).
-            bool areaFromInitPdf = false;
-            if (!wifiMap->area())
-                if (const auto box = initialPdfArea(ini); box)
-                {
-                    wifiMap->setArea(box);
-                    areaFromInitPdf = true;
-                }
+            const bool areaFromInitPdf = boundByInitialPdf(*wifiMap, ini);
 
             // ---- The input.
             std::string rawlog = argRawlog.getValue();
@@ -461,16 +454,9 @@ int main(int argc, char** argv)
                 << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
                 << fmt(app.steps / std::max(runTime, 1e-9), 1) << " steps/s)\n"
                 << "  map warnings   : " << wifiMap->unknownTransmitterCount() << "\n";
-            if (const auto& a = wifiMap->area(); a)
-            {
-                const auto outside = std::count_if(
-                    est.poses.begin(), est.poses.end(),
-                    [&](const auto& p) { return !wifiMap->inArea(p.x, p.y); });
-                sum << "  area           : x " << fmt(a->min.x, 2) << ".." << fmt(a->max.x, 2)
-                    << " y " << fmt(a->min.y, 2) << ".." << fmt(a->max.y, 2) << " m"
-                    << (areaFromInitPdf ? " (the init_PDF box)" : " (the map's)") << ", " << outside
-                    << " estimates outside it\n";
-            }
+            if (const auto area = areaSummary(*wifiMap, est.poses); !area.empty())
+                sum << "  area           : " << area
+                    << (areaFromInitPdf ? " (the init_PDF box)" : " (the map's)") << "\n";
             sum << "  recovery       : " << recoveryOptions.asString();
             if (const auto& r = app.recovery(); r) sum << ": " << recoverySummary(*r);
             sum << "\n";

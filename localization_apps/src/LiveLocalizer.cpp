@@ -55,6 +55,14 @@ std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConf
     return box;
 }
 
+bool boundByInitialPdf(CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini)
+{
+    if (map.area()) return false;
+    const auto box = initialPdfArea(ini);
+    if (box) map.setArea(box);
+    return box.has_value();
+}
+
 mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(
     const mrpt::config::CConfigFileBase& ini)
 {
@@ -90,12 +98,7 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     // The map, as wifi-pf-localization builds it (relative transmitters_file: cwd, then iniDir),
     // bounded by the init_PDF box unless it sets its own area.
     wifiMap_ = wifiMapFromIni(ini, iniDir);
-    if (!wifiMap_->area())
-        if (const auto box = initialPdfArea(ini); box)
-        {
-            wifiMap_->setArea(box);
-            areaFromInitPdf_ = true;
-        }
+    areaFromInitPdf_ = boundByInitialPdf(*wifiMap_, ini);
     map_->maps.push_back(wifiMap_);
     motion_.loadFromConfigFile(ini, "UnknownMotion");
     cv_ = ConstantVelocityPrediction(motion_);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -129,6 +130,19 @@ std::string recoverySummary(const ParticleRecovery& r)
 {
     return std::to_string(r.recoveryEpisodes()) + " episodes, " +
            std::to_string(r.recoverySteps()) + " steps re-seeding particles";
+}
+
+std::string areaSummary(
+    const CWiFiBearingMap& map, const std::vector<mrpt::math::TPose2D>& estimates)
+{
+    const auto& a = map.area();
+    if (!a) return {};
+    const auto outside = std::count_if(
+        estimates.begin(), estimates.end(), [&](const auto& p) { return !map.inArea(p.x, p.y); });
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(2) << "x " << a->min.x << ".." << a->max.x << " y "
+      << a->min.y << ".." << a->max.y << " m, " << outside << " estimates outside it";
+    return o.str();
 }
 
 }  // namespace mrpt_wifi::localization

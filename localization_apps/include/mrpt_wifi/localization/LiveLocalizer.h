@@ -30,6 +30,9 @@ CWiFiBearingMap::Ptr wifiMapFromIni(
  *  (init_PDF_mode = 1): where a kidnapped robot can be, the map's area when the map sets none. */
 std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConfigFileBase& ini);
 
+/** Bounds a map without an area of its own by initialPdfArea(); true if it did. */
+bool boundByInitialPdf(CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini);
+
 /** MRPT's Gaussian odometry model as its pf-localization configures it for observation-only
  *  rawlogs: `[DummyOdometryParams] minStdXY` [m] and `minStdPHI` [deg] floors. */
 mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(

@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace mrpt_wifi::localization
 {
@@ -86,5 +87,10 @@ mrpt::obs::CActionRobotMovement2D withReseeding(
 
 /** Summary line: "N episodes, M steps re-seeding particles". */
 std::string recoverySummary(const ParticleRecovery& r);
+
+/** Summary line of a map's area and a filter's estimates: "x A..B y C..D m, N estimates outside
+ *  it"; empty when the map has no area. */
+std::string areaSummary(
+    const CWiFiBearingMap& map, const std::vector<mrpt::math::TPose2D>& estimates);
 
 }  // namespace mrpt_wifi::localization
