@@ -69,6 +69,20 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argOdoYaw(
                 "", "odo-sigma-yaw", "Odometry heading noise [deg per sqrt(m)]", false, 1.0, "K",
                 cmd);
+            TCLAP::ValueArg<double> argScaleStd(
+                "", "odo-scale-std",
+                "Odometry scale error, sigma (0.02 = 2 %): estimated with this prior (0 with "
+                "--odo-yaw-drift-std 0: the odometry has no systematic error)",
+                false, 0.02, "S", cmd);
+            TCLAP::ValueArg<double> argYawDriftStd(
+                "", "odo-yaw-drift-std",
+                "Odometry heading drift, sigma [deg per m travelled]: estimated with this prior",
+                false, 0.3, "DEG", cmd);
+            TCLAP::ValueArg<double> argDecorrelation(
+                "", "decorrelation",
+                "Bearings received within a cell of this size [m] share their multipath error: "
+                "per AP they weigh as one bearing per cell visited; 0: every bearing independent",
+                false, 0.5, "M", cmd);
             TCLAP::ValueArg<double> argMinStd(
                 "", "min-std", "Floor on bearing sigma [deg]", false, 3.0, "DEG", cmd);
             TCLAP::ValueArg<std::string> argLoss(
@@ -137,6 +151,13 @@ int main(int argc, char** argv)
             opt.nodePeriod_s = argPeriod.getValue();
             opt.odoSigmaXY_perSqrtM = argOdoXY.getValue();
             opt.odoSigmaYaw_perSqrtM = mrpt::DEG2RAD(argOdoYaw.getValue());
+            if (argScaleStd.getValue() < 0 || argYawDriftStd.getValue() < 0 ||
+                argDecorrelation.getValue() < 0)
+                throw std::invalid_argument(
+                    "--odo-scale-std, --odo-yaw-drift-std and --decorrelation must be >= 0");
+            opt.odoScaleStd = argScaleStd.getValue();
+            opt.odoYawDriftStd_radPerM = mrpt::DEG2RAD(argYawDriftStd.getValue());
+            opt.bearingDecorrelation_m = argDecorrelation.getValue();
             opt.minStd_rad = mrpt::DEG2RAD(argMinStd.getValue());
             opt.loss = argLoss.getValue();
             opt.lossScale = argLossScale.getValue();
@@ -172,6 +193,17 @@ int main(int argc, char** argv)
                 << "  solver    : " << res.solverReport << "\n";
             sum << "  start     : " << res.placement << " (lowest final cost of " << res.hypotheses
                 << " optimised starts)\n";
+            if (opt.odoScaleStd > 0 || opt.odoYawDriftStd_radPerM > 0)
+            {
+                char b[160];
+                std::snprintf(
+                    b, sizeof(b),
+                    "  odometry  : scale x%.4f, heading drift %+.3f deg/m (estimated; priors "
+                    "%.3f, %.2f deg/m)\n",
+                    res.odometryScale, mrpt::RAD2DEG(res.odometryYawDrift_radPerM), opt.odoScaleStd,
+                    mrpt::RAD2DEG(opt.odoYawDriftStd_radPerM));
+                sum << b;
+            }
             if (!res.converged)
             {
                 const std::string warn =

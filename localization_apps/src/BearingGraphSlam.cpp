@@ -14,6 +14,7 @@
 #include <map>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "BearingResiduals.h"
@@ -310,6 +311,20 @@ GraphSlamResult solveOnce(
     for (auto& x : X) problem.AddParameterBlock(x.data(), 3);
     for (auto& a : A) problem.AddParameterBlock(a.data(), 3);
 
+    // The odometry's scale and heading drift per metre: estimated with their priors, or held at
+    // "none" (a constant block).
+    std::array<double, 2> odoBias = {1.0, 0.0};
+    problem.AddParameterBlock(odoBias.data(), 2);
+    const bool estimateBias = opt.odoScaleStd > 0 || opt.odoYawDriftStd_radPerM > 0;
+    if (estimateBias)
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<detail::OdometryBiasPrior, 2, 2>(
+                new detail::OdometryBiasPrior{
+                    std::max(opt.odoScaleStd, 1e-9), std::max(opt.odoYawDriftStd_radPerM, 1e-9)}),
+            nullptr, odoBias.data());
+    else
+        problem.SetParameterBlockConstant(odoBias.data());
+
     UnionFind uf(N);
     auto addOdo = [&](size_t i, size_t j, const TPose2D& z, const Eigen::Matrix3d& info)
     {
@@ -317,12 +332,12 @@ GraphSlamResult solveOnce(
         if (llt.info() != Eigen::Success)
             throw std::runtime_error("graph SLAM: an odometry edge's information isn't positive");
         const Eigen::Matrix3d U = llt.matrixU();
-        auto* r = new detail::OdometryResidual{z.x, z.y, z.phi, {}};
+        auto* r = new detail::OdometryResidual{z.x, z.y, z.phi, std::hypot(z.x, z.y), {}};
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) r->sqrtInfo[3 * a + b] = U(a, b);
         problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<detail::OdometryResidual, 3, 3, 3>(r), nullptr,
-            X[i].data(), X[j].data());
+            new ceres::AutoDiffCostFunction<detail::OdometryResidual, 3, 3, 3, 2>(r), nullptr,
+            X[i].data(), X[j].data(), odoBias.data());
         uf.unite(i, j);
         res.odometryEdges++;
     };
@@ -364,6 +379,29 @@ GraphSlamResult solveOnce(
                 " has no odometry path to node 0)");
 
     auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
+    // Bearings taken close together share their multipath error: per transmitter, n bearings
+    // from c distinct cells carry about c independent ones, so each σ grows by sqrt(n / c).
+    std::map<MacAddress, double> decorrelation;
+    if (opt.bearingDecorrelation_m > 0)
+    {
+        std::map<MacAddress, std::set<std::pair<long, long>>> cells;
+        std::map<MacAddress, size_t> count;
+        for (const auto& a : att)
+        {
+            const auto s = compose(TPose2D(X[a.node][0], X[a.node][1], X[a.node][2]), a.offset);
+            cells[a.b->transmitter].emplace(
+                long(std::floor(s.x / opt.bearingDecorrelation_m)),
+                long(std::floor(s.y / opt.bearingDecorrelation_m)));
+            count[a.b->transmitter]++;
+        }
+        for (const auto& [mac, c] : cells)
+            decorrelation[mac] = std::sqrt(double(count[mac]) / double(c.size()));
+    }
+    const auto decorrelated = [&](const BearingRecord& b, double s)
+    {
+        const auto it = decorrelation.find(b.transmitter);
+        return sigma(s) * (it == decorrelation.end() ? 1.0 : it->second);
+    };
     std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     std::vector<std::pair<ceres::ResidualBlockId, double>> bearingBlocks;  // with σ
     for (const auto& a : att)
@@ -378,9 +416,9 @@ GraphSlamResult solveOnce(
                     new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
                         new detail::AoaResidual{
                             a.offset.x, a.offset.y, a.offset.phi, a.b->aoa, a.b->aoaMirror,
-                            sigma(a.b->aoaStd), a.b->aoaAmbiguous}),
+                            decorrelated(*a.b, a.b->aoaStd), a.b->aoaAmbiguous}),
                     detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
-                sigma(a.b->aoaStd));
+                decorrelated(*a.b, a.b->aoaStd));
             res.aoaEdges++;
             apUsed[it->second] = true;
         }
@@ -390,10 +428,10 @@ GraphSlamResult solveOnce(
                 problem.AddResidualBlock(
                     new ceres::AutoDiffCostFunction<detail::AodResidual, 1, 3, 3>(
                         new detail::AodResidual{
-                            a.offset.x, a.offset.y, a.b->aod, a.b->aodMirror, sigma(a.b->aodStd),
-                            a.b->aodAmbiguous}),
+                            a.offset.x, a.offset.y, a.b->aod, a.b->aodMirror,
+                            decorrelated(*a.b, a.b->aodStd), a.b->aodAmbiguous}),
                     detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
-                sigma(a.b->aodStd));
+                decorrelated(*a.b, a.b->aodStd));
             res.aodEdges++;
             apUsed[it->second] = apAod[it->second] = true;
         }
@@ -423,6 +461,7 @@ GraphSlamResult solveOnce(
     res.iterations = int(sum.iterations.size());
     res.converged = sum.termination_type == ceres::CONVERGENCE;
     res.solverReport = sum.BriefReport();
+    res.odometryScale = odoBias[0], res.odometryYawDrift_radPerM = odoBias[1];
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
 
     // ---- How far the bearings are from the solution: biased bearings (e.g. a receiver

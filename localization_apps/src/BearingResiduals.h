@@ -29,24 +29,41 @@ T closestCandidate(const T& predicted, double z, bool ambiguous, double mirror)
     return abs(r2) < abs(r1) ? r2 : r1;
 }
 
-/** SE(2) relative-pose edge (odometry), whitened by the square root of its information. */
+/** SE(2) relative-pose edge (odometry), whitened by the square root of its information. The
+ *  odometry's systematic errors are a parameter block shared by all edges: bias[0] scales the
+ *  measured translation, bias[1] adds a heading change per metre travelled (dist). */
 struct OdometryResidual
 {
-    double dx, dy, dth;
+    double dx, dy, dth, dist;
     double sqrtInfo[9];  // row-major, upper-triangular Cholesky factor of the information
 
     template <typename T>
-    bool operator()(const T* pi, const T* pj, T* r) const
+    bool operator()(const T* pi, const T* pj, const T* bias, T* r) const
     {
         using std::cos, std::sin;
         const T c = cos(pi[2]), s = sin(pi[2]);
-        const T ex = c * (pj[0] - pi[0]) + s * (pj[1] - pi[1]) - T(dx);
-        const T ey = -s * (pj[0] - pi[0]) + c * (pj[1] - pi[1]) - T(dy);
-        const T et = wrapAngle(pj[2] - pi[2] - T(dth));
+        const T ex = c * (pj[0] - pi[0]) + s * (pj[1] - pi[1]) - bias[0] * T(dx);
+        const T ey = -s * (pj[0] - pi[0]) + c * (pj[1] - pi[1]) - bias[0] * T(dy);
+        const T et = wrapAngle(pj[2] - pi[2] - T(dth) - bias[1] * T(dist));
         const T e[3] = {ex, ey, et};
         for (int k = 0; k < 3; ++k)
             r[k] = T(sqrtInfo[3 * k]) * e[0] + T(sqrtInfo[3 * k + 1]) * e[1] +
                    T(sqrtInfo[3 * k + 2]) * e[2];
+        return true;
+    }
+};
+
+/** Prior on the odometry's systematic errors: scale 1 ± scaleStd, heading drift 0 ± yawStd
+ *  [rad/m]. */
+struct OdometryBiasPrior
+{
+    double scaleStd, yawStd;
+
+    template <typename T>
+    bool operator()(const T* bias, T* r) const
+    {
+        r[0] = (bias[0] - T(1)) / T(scaleStd);
+        r[1] = bias[1] / T(yawStd);
         return true;
     }
 };

@@ -169,9 +169,12 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
         {
             const double sg = o.model.sigma(rays[i].sigma);
             if (res[i] >= o.inlierSigmas * sg) continue;
-            cells.emplace(
-                long(std::floor(rays[i].x / o.decorrelation_m)),
-                long(std::floor(rays[i].y / o.decorrelation_m)));
+            if (o.decorrelation_m > 0)
+                cells.emplace(
+                    long(std::floor(rays[i].x / o.decorrelation_m)),
+                    long(std::floor(rays[i].y / o.decorrelation_m)));
+            else
+                cells.emplace(long(i), 0L);  // every bearing independent
             chi2 += (res[i] / sg) * (res[i] / sg);
         }
         if (d.inliers > 0 && !cells.empty())

@@ -12,6 +12,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -29,6 +30,10 @@ struct WorldOptions
     double odoScaleError = 0.02;  //!< odometry drift
     double odoYawDrift = 0.006;   //!< rad per metre
     bool aod = true;
+    /** Multipath: an AoA error that depends on where the robot is, the same on every lap (per
+     *  AP a smooth field of this amplitude [rad], wavelength multipathScale_m). */
+    double multipathAmplitude = 0;
+    double multipathScale_m = 1.5;
     uint64_t seed = 3;
     std::vector<mrpt::math::TPoint2D> loop = {{2, 2}, {8, 2}, {8, 4}, {2, 4}};
 };
@@ -101,12 +106,33 @@ inline World makeWorld(const TransmitterMap& aps, const WorldOptions& o)
             odo.x + co * fx - so * fy, odo.y + so * fx + co * fy, wrapToPi(odo.phi + dth));
         w.odometry.push_back(w.truth.t[i], odo);
     }
+    // Multipath field per AP: random phases and directions, drawn once (own generator: the
+    // other draws stay as they were without multipath).
+    mrpt::random::CRandomGenerator fieldRng(o.seed + 7919);
+    struct Wave
+    {
+        double kx, ky, phase;
+    };
+    std::vector<std::array<Wave, 2>> fields(aps.size());
+    for (auto& f : fields)
+        for (auto& wv : f)
+        {
+            const double dir = fieldRng.drawUniform(-M_PI, M_PI), k = 2 * M_PI / o.multipathScale_m;
+            wv = {k * std::cos(dir), k * std::sin(dir), fieldRng.drawUniform(-M_PI, M_PI)};
+        }
+    const auto multipath = [&](size_t ap, double x, double y)
+    {
+        double e = 0;
+        for (const auto& wv : fields[ap]) e += std::sin(wv.kx * x + wv.ky * y + wv.phase);
+        return o.multipathAmplitude * e / std::sqrt(2.0);
+    };
     // Bearings.
     const mrpt::math::TPose2D sensor(0.1, 0, 0);
     const size_t step = size_t(std::round(1.0 / (o.rate_Hz * dt)));
     for (size_t i = 0; i < w.truth.size() && w.truth.t[i] < w.odometry.t.back(); i += step)
-        for (const auto& ap : aps.transmitters())
+        for (size_t j = 0; j < aps.size(); ++j)
         {
+            const auto& ap = aps.transmitters()[j];
             BearingRecord r;
             r.t = w.truth.t[i] + 1e-4;
             r.transmitter = ap.mac;
@@ -130,8 +156,9 @@ inline World makeWorld(const TransmitterMap& aps, const WorldOptions& o)
             r.hasAoa = true;
             r.aoaStd = o.aoaStd;
             report(
-                w.rxArray, noisy(predictAoa(s, ap.pose.x, ap.pose.y), o.aoaStd), r.aoa,
-                r.aoaAmbiguous, r.aoaMirror);
+                w.rxArray,
+                noisy(predictAoa(s, ap.pose.x, ap.pose.y) + multipath(j, s.x, s.y), o.aoaStd),
+                r.aoa, r.aoaAmbiguous, r.aoaMirror);
             if (o.aod)
             {
                 r.hasAod = true;

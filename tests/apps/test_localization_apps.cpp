@@ -584,6 +584,9 @@ TEST(LocalizationAppsIot, DevicesFromDriftingOdometryJointly)
     std::sort(errs.begin(), errs.end());
     EXPECT_LE(0.5 * (errs[1] + errs[2]), 0.5) << r.out;
     EXPECT_GE(covered, 2u) << r.out;  // the issue: >= 2 of 3 devices within 2 sigma
+    // Issue 19.3: every device inside its 95 % ellipse (the summary checks it against --truth).
+    EXPECT_NE(r.out.find("inside their 95 % ellipse: 4 of 4 true devices"), std::string::npos)
+        << r.out;
     EXPECT_TRUE(mrpt::system::fileExists(f.dir + "/iot-joint/trajectory_tum.txt"));
     // Trusting the same odometry as the trajectory is what the joint estimate improves on.
     const auto trusted = run(common + "-t " + f.dir + "/iot-odo.txt -o " + f.dir + "/iot-odo");

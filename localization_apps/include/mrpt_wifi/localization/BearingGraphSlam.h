@@ -20,6 +20,17 @@ struct GraphSlamOptions
     double odoSigmaYaw_perSqrtM = 0.0175;  //!< rad/√m (1°)
     double odoSigmaYaw_perSqrtRad = 0.02;
     double odoSigmaXY_min = 0.005, odoSigmaYaw_min = 0.002;
+    /** Systematic odometry errors, common to every edge: a scale error (σ of the factor: 0.02
+     *  for 2 %) and a heading drift per metre travelled (σ [rad/m]; 0.3°/m), a wheeled robot
+     *  on an office floor. With either > 0 both are estimated with these priors (the joint
+     *  covariance then includes them: bearings alone cannot observe the scale); 0 and 0: the
+     *  odometry has none. */
+    double odoScaleStd = 0.02, odoYawDriftStd_radPerM = 0.005236;
+    /** > 0: the bearings of each transmitter count as one per cell of this size [m] that their
+     *  receive positions visit (each σ × sqrt(bearings / cells)): bearings taken close together
+     *  share their multipath error, so thousands of them are not thousands of independent
+     *  measurements, and the covariance (apCovariance) is honest about it; 0: independent. */
+    double bearingDecorrelation_m = 0.5;
 
     bool useAoa = true, useAod = true;
     double minStd_rad = 0.0349;  //!< floor on bearing σ (2°)
@@ -94,6 +105,9 @@ struct GraphSlamResult
      *  estimated-AP solution; unknown APs: the odometry start and the grown start). */
     std::string placement;
     size_t hypotheses = 1;
+    /** With GraphSlamOptions::odoScaleStd / odoYawDriftStd_radPerM: the estimated odometry
+     *  scale factor and heading drift [rad/m]. */
+    double odometryScale = 1, odometryYawDrift_radPerM = 0;
 };
 
 /** Builds and solves the graph (Ceres). Throws std::runtime_error on an empty odometry, no usable
