@@ -64,10 +64,10 @@ if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Rel
     rm -rf "$corpus"; mkdir -p "$corpus"
     case $target in
       fuzz_nexmon_assembler) build-fuzz/bin/fuzz_make_seeds "$corpus" ;;
-      fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ ;;
-      fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ ;;
-      fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ ;;
-      fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ ;;
+      fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" nexmon tests/data ;;
+      fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" intel5300 tests/data ;;
+      fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" esp32 tests/data ;;
+      fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" atheros tests/data ;;
     esac
     # Any non-pcap input is read as a rawlog, so the fuzzer reaches every class in MRPT's
     # registry, and MRPT's own readers allocate whatever a damaged count claims (this project's

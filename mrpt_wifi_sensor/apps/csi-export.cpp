@@ -102,6 +102,12 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<unsigned> argPort(
                 "p", "port", "UDP port of the CSI datagrams in captures (0: any)", false, 5500,
                 "PORT", cmd);
+            TCLAP::SwitchArg argStrict(
+                "", "strict",
+                "Stop at the first malformed record (exit 1; what came before is kept) instead of "
+                "skipping it: by default malformed records are skipped and counted by reason, "
+                "the file is finished, and the exit status is 3 when anything was skipped",
+                cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
@@ -110,6 +116,7 @@ int main(int argc, char** argv)
             CsiDecodeOptions options;
             options.udpPort = uint16_t(argPort.getValue());
             const std::string format = applyFormatOption(argFormat.getValue(), options);
+            options.strict = argStrict.getValue();
             if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
 
@@ -167,6 +174,13 @@ int main(int argc, char** argv)
                     total.incomplete);
             }
             std::cerr << summary.asString() << "\n";
+            if (rc == 0 && summary.rejectedRecords() > 0)
+            {
+                std::cerr << "csi-export: " << summary.rejectedRecords()
+                          << " malformed records skipped (listed above; --strict stops at the "
+                             "first)\n";
+                rc = cli::kExitRecordsSkipped;
+            }
             return rc;
         });
 }

@@ -18,6 +18,18 @@ std::mutex& registryMutex()
 constexpr size_t kProbeBytes = 4096;
 }  // namespace
 
+uint64_t CsiDecodeSummary::rejectedRecords() const
+{
+    uint64_t n = 0;
+    for (const auto& r : rejected) n += r.count;
+    return n;
+}
+
+void CsiDecodeSummary::noteOnce(const std::string& note)
+{
+    if (std::find(notes.begin(), notes.end(), note) == notes.end()) notes.push_back(note);
+}
+
 std::string CsiDecodeSummary::asString() const
 {
     std::ostringstream o;
@@ -25,8 +37,34 @@ std::string CsiDecodeSummary::asString() const
     if (skipped) o << " (" << skipped << " without CSI skipped)";
     if (!details.empty()) o << "\n" << details;
     for (const auto& n : notes) o << "\nnote: " << n;
+    for (const auto& r : rejected)
+        o << "\nskipped " << r.count << " malformed record" << (r.count == 1 ? "" : "s") << ": "
+          << r.reason << " (first at " << r.firstWhere << ")";
     o << "\nCSI frames: " << frames;
     return o.str();
+}
+
+void rejectRecord(
+    const std::string& path, const std::string& format, const CsiDecodeOptions& options,
+    CsiDecodeSummary& summary, uint64_t offset, const std::string& reason,
+    const std::string& detail, const std::string& where)
+{
+    const std::string what =
+        (where.empty() ? "" : where + ": ") + (detail.empty() ? reason : reason + ": " + detail);
+    if (options.strict) throw CsiDecodeError(path, offset, format, what);
+    for (auto& r : summary.rejected)
+        if (r.reason == reason)
+        {
+            ++r.count;
+            return;
+        }
+    CsiRejectedRecords r;
+    r.reason = reason;
+    r.count = 1;
+    r.firstOffset = offset;
+    r.firstWhere = (where.empty() ? "byte " + std::to_string(offset) : where) +
+                   (detail.empty() ? "" : ", " + detail);
+    summary.rejected.push_back(r);
 }
 
 CsiDecodeError::CsiDecodeError(

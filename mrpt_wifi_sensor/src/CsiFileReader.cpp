@@ -39,7 +39,21 @@ void readCapture(
         {
             // Capture time drives the timeout, so a replay assembles exactly as live capture.
             assembler.flushExpired(d.timestamp);
-            assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress);
+            const auto before = assembler.stats().rejected;
+            if (!assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress))
+            {
+                const auto& after = assembler.stats().rejected;
+                for (size_t r = 0; r < after.size(); ++r)
+                {
+                    if (after[r] == before[r]) continue;
+                    if (options.strict)
+                        throw std::runtime_error(
+                            "'" + path + "' at byte " + std::to_string(d.fileOffset) +
+                            ": datagram rejected (" + nexmon::toString(nexmon::RejectReason(r)) +
+                            ")");
+                    if (before[r] == 0) summary.firstRejectedOffset[r] = d.fileOffset;
+                }
+            }
             progress.update(reader.position(), reader.fileSize());
         }
     }

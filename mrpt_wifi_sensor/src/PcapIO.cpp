@@ -191,6 +191,15 @@ bool PcapReader::next(PcapUdpDatagram& out)
         const u_char* pkt = nullptr;
         const int rc = pcap_next_ex(impl_->handle, &hdr, &pkt);
         if (rc == PCAP_ERROR_BREAK) return false;  // end of file
+        if (rc != 1 &&
+            std::string(pcap_geterr(impl_->handle)).find("truncated") != std::string::npos &&
+            fileSize() > recordOffset)
+        {
+            // libpcap: "truncated dump file; tried to read N ... only got M" — the last record.
+            stats_.truncatedTail = true;
+            stats_.truncatedTailOffset = recordOffset;
+            return false;
+        }
         if (rc != 1)
             throw fileError(
                 path_, recordOffset,

@@ -1,29 +1,52 @@
-// Writes a seed corpus for fuzz_nexmon_assembler: valid frames of every header variant and
-// bandwidth, in the fuzzer's record format. Usage: fuzz_make_seeds DIR
+// Writes seed corpora for the fuzz targets.
+//   fuzz_make_seeds DIR                   fuzz_nexmon_assembler: valid frames of every header
+//                                         variant and bandwidth, in the fuzzer's record format
+//   fuzz_make_seeds DIR FORMAT DATA_DIR   fuzz_decoder_FORMAT: the sample files of
+//                                         DATA_DIR/FORMAT plus one file per length check of
+//                                         that decoder (a declared length that disagrees
+//                                         with the bytes), so the fuzzer starts at each.
 #include <mrpt_wifi/sensor/NexmonFormat.h>
+#include <mrpt_wifi/sensor/PcapIO.h>
 
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <iterator>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "SyntheticCsi.h"
 
 using namespace mrpt_wifi;
+namespace fs = std::filesystem;
+using Bytes = std::vector<uint8_t>;
 
-int main(int argc, char** argv)
+namespace
 {
-    if (argc != 2)
-    {
-        std::cerr << "usage: fuzz_make_seeds DIR\n";
-        return 1;
-    }
+Bytes readFile(const fs::path& p)
+{
+    std::ifstream in(p, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot read " + p.string());
+    return Bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void writeFile(const fs::path& p, const Bytes& b)
+{
+    std::ofstream(p, std::ios::binary)
+        .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+}
+
+int nexmonAssemblerSeeds(const fs::path& dir)
+{
     int n = 0;
     for (auto variant :
          {NexmonHeaderVariant::Nexmon, NexmonHeaderVariant::NexmonLegacy,
           NexmonHeaderVariant::UbiLocate})
         for (unsigned bw : {20u, 40u, 80u})
         {
-            std::ofstream f(
-                std::string(argv[1]) + "/seed_" + std::to_string(n++), std::ios::binary);
+            std::ofstream f(dir / ("seed_" + std::to_string(n++)), std::ios::binary);
             f.put(char(uint8_t(variant) + 1));
             for (uint16_t seq = 0; seq < 2; ++seq)
                 for (const auto& d : nexmon::encodeFrame(
@@ -34,6 +57,130 @@ int main(int argc, char** argv)
                     f.write(reinterpret_cast<const char*>(d.data()), std::streamsize(d.size()));
                 }
         }
-    std::cout << "wrote " << n << " seeds to " << argv[1] << "\n";
+    return n;
+}
+
+/** Intel 5300 .dat: records of [2-byte BE length][code][payload]. */
+std::map<std::string, Bytes> intelCases(const Bytes& sample)
+{
+    const size_t len0 = size_t(sample[0] << 8 | sample[1]);
+    const Bytes first(sample.begin(), sample.begin() + long(2 + len0));
+    const auto withLength = [](Bytes rec, size_t extra, uint8_t fill)
+    {
+        const size_t len = size_t(rec[0] << 8 | rec[1]) + extra;
+        rec[0] = uint8_t(len >> 8), rec[1] = uint8_t(len & 0xFF);
+        // The extra bytes between the 20-byte header and the CSI (the WSR Toolbox's place).
+        rec.insert(rec.begin() + 2 + 21, extra, fill);
+        return rec;
+    };
+    std::map<std::string, Bytes> c;
+    c["wsr-variant"] = withLength(first, 18, 0x5A);
+    c["record-longer-than-payload"] = withLength(first, 5, 0);
+    Bytes field = first;
+    field[2 + 1 + 16] ^= 0x01;  // the payload-length field no longer matches Nrx·Ntx
+    c["payload-field-mismatch"] = field;
+    Bytes two = first;
+    two.insert(two.end(), first.begin(), first.end() - 40);  // second record cut
+    c["truncated-tail"] = two;
+    return c;
+}
+
+/** Atheros CSI Tool: records of [2-byte LE length][25-byte status][CSI][payload]. */
+std::map<std::string, Bytes> atherosCases(const Bytes& sample)
+{
+    const size_t len0 = size_t(sample[0] | sample[1] << 8);
+    const Bytes first(sample.begin(), sample.begin() + long(2 + len0));
+    std::map<std::string, Bytes> c;
+    Bytes csiLen = first;
+    csiLen[2 + 8] ^= 0x02;  // csi_len vs the record length
+    c["sizes-do-not-add-up"] = csiLen;
+    Bytes tones = first;
+    tones[2 + 17] = 1, tones[2 + 18] = 1;  // 1x1 where csi_len holds more
+    c["csi-len-vs-antennas"] = tones;
+    Bytes two = first;
+    two.insert(two.end(), first.begin(), first.end() - 100);
+    c["truncated-tail"] = two;
+    return c;
+}
+
+/** esp-csi / ESP32-CSI-Tool lines. */
+std::map<std::string, Bytes> esp32Cases(const Bytes& sample, const Bytes& csiTool)
+{
+    const std::string text(sample.begin(), sample.end());
+    const std::string line = text.substr(0, text.find('\n') + 1);
+    std::map<std::string, Bytes> c;
+    const auto put = [&](const std::string& name, const std::string& s)
+    { c[name] = Bytes(s.begin(), s.end()); };
+    // len says more than the bracket holds (not exactly the L-LTF).
+    const size_t close = line.rfind(']');
+    put("len-vs-values", line.substr(0, close - 8) + line.substr(close));
+    put("cut-last-line", line + line.substr(0, line.size() / 2));
+    put("csi-tool-short-rows", std::string(csiTool.begin(), csiTool.end()));
+    return c;
+}
+
+/** Nexmon captures: a pcap whose last record is cut, one datagram of the wrong size. */
+std::map<std::string, Bytes> nexmonCases(const fs::path& tmp)
+{
+    std::map<std::string, Bytes> c;
+    const auto frame = test::syntheticFrame(2, 2, 80, 1);
+    {
+        PcapWriter w((tmp / "full.pcap").string());
+        for (const auto& d : nexmon::encodeFrame(*frame))
+            w.writeUdp(d.data(), d.size(), mrpt::Clock::fromDouble(1.0));
+        auto bad = nexmon::encodeFrame(*frame).front();
+        bad.resize(bad.size() - 4);  // length disagrees with the bandwidth's NFFT
+        w.writeUdp(bad.data(), bad.size(), mrpt::Clock::fromDouble(1.1));
+    }
+    Bytes full = readFile(tmp / "full.pcap");
+    c["wrong-size-datagram"] = full;
+    full.resize(full.size() - 30);
+    c["truncated-tail"] = full;
+    fs::remove(tmp / "full.pcap");
+    return c;
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    if (argc != 2 && argc != 4)
+    {
+        std::cerr << "usage: fuzz_make_seeds DIR [FORMAT DATA_DIR]\n";
+        return 1;
+    }
+    const fs::path dir = argv[1];
+    fs::create_directories(dir);
+    if (argc == 2)
+    {
+        std::cout << "wrote " << nexmonAssemblerSeeds(dir) << " seeds to " << dir.string() << "\n";
+        return 0;
+    }
+    const std::string format = argv[2];
+    const fs::path data = argv[3];
+    std::map<std::string, Bytes> cases;
+    const auto firstFile = [&](const std::string& sub, const std::string& ext)
+    {
+        for (const auto& e : fs::directory_iterator(data / sub))
+            if (e.path().extension() == ext) return readFile(e.path());
+        throw std::runtime_error("no " + ext + " sample in " + (data / sub).string());
+    };
+    if (format == "intel5300")
+        cases = intelCases(firstFile("intel5300", ".dat"));
+    else if (format == "atheros")
+        cases = atherosCases(firstFile("atheros", ".dat"));
+    else if (format == "esp32")
+        cases = esp32Cases(
+            readFile(data / "esp32" / "csi_data.csv"),
+            readFile(data / "esp32-csi-tool" / "example_data.first20.csv"));
+    else if (format == "nexmon")
+        cases = nexmonCases(dir);
+    else
+    {
+        std::cerr << "fuzz_make_seeds: unknown format '" << format << "'\n";
+        return 1;
+    }
+    for (const auto& [name, bytes] : cases) writeFile(dir / ("length-check-" + name), bytes);
+    std::cout << "wrote " << cases.size() << " length-check seeds for " << format << " to "
+              << dir.string() << "\n";
     return 0;
 }

@@ -48,13 +48,19 @@ const std::vector<int>& toneSubcarriers(unsigned tones)
     throw std::invalid_argument("Atheros CSI: " + std::to_string(tones) + " tones (56 or 114)");
 }
 
-bool parseRecord(const uint8_t* d, size_t length, AtherosRecord& r, std::string& why)
+bool parseRecord(
+    const uint8_t* d, size_t length, AtherosRecord& r, std::string& why, std::string* reason)
 {
-    if (length < kStatusBytes)
+    const auto fail = [&](const char* category, std::string text)
     {
-        why = "record of " + std::to_string(length) + " bytes, shorter than the 25-byte status";
+        if (reason) *reason = category;
+        why = std::move(text);
         return false;
-    }
+    };
+    if (length < kStatusBytes)
+        return fail(
+            "record shorter than the 25-byte status",
+            "record of " + std::to_string(length) + " bytes");
     r = AtherosRecord{};
     for (int i = 7; i >= 0; --i) r.timestamp = (r.timestamp << 8) | d[i];
     r.csiLen = readLE16(d + 8);
@@ -70,32 +76,25 @@ bool parseRecord(const uint8_t* d, size_t length, AtherosRecord& r, std::string&
     std::memcpy(r.chainRssi, d + 20, 3);
     r.payloadLen = readLE16(d + 23);
     if (kStatusBytes + size_t(r.csiLen) + r.payloadLen != length)
-    {
-        why = "sizes don't add up: 25 + csi_len " + std::to_string(r.csiLen) + " + payload_len " +
-              std::to_string(r.payloadLen) + " != record length " + std::to_string(length) +
-              " (a big-endian log, or not an Atheros CSI Tool log?)";
-        return false;
-    }
+        return fail(
+            "sizes don't add up to the record length (a big-endian log, or not an Atheros CSI "
+            "Tool log?)",
+            "25 + csi_len " + std::to_string(r.csiLen) + " + payload_len " +
+                std::to_string(r.payloadLen) + " != record length " + std::to_string(length));
     if (r.csiLen == 0) return true;  // a frame without CSI
     if (r.nr < 1 || r.nr > kMaxAntennas || r.nc < 1 || r.nc > kMaxAntennas)
-    {
-        why = "impossible antenna counts nr=" + std::to_string(r.nr) +
-              " nc=" + std::to_string(r.nc) + " (1–3)";
-        return false;
-    }
+        return fail(
+            "impossible antenna counts",
+            "nr=" + std::to_string(r.nr) + " nc=" + std::to_string(r.nc) + " (1–3)");
     if (r.tones != 56 && r.tones != 114)
-    {
-        why = "impossible number of tones " + std::to_string(r.tones) + " (56 or 114)";
-        return false;
-    }
+        return fail("impossible number of tones", std::to_string(r.tones) + " tones (56 or 114)");
     const size_t values = size_t(r.nr) * r.nc * r.tones * 2;
     if (r.csiLen * 8u != values * kBitsPerValue)
-    {
-        why = "csi_len " + std::to_string(r.csiLen) + " bytes where nr=" + std::to_string(r.nr) +
-              " nc=" + std::to_string(r.nc) + " tones=" + std::to_string(r.tones) + " need " +
-              std::to_string(values * kBitsPerValue / 8);
-        return false;
-    }
+        return fail(
+            "csi_len disagrees with the antenna and tone counts",
+            "csi_len " + std::to_string(r.csiLen) + " bytes where nr=" + std::to_string(r.nr) +
+                " nc=" + std::to_string(r.nc) + " tones=" + std::to_string(r.tones) + " need " +
+                std::to_string(values * kBitsPerValue / 8));
     // 10-bit two's-complement values, least significant bit first.
     const uint8_t* bits = d + kStatusBytes;
     const auto value = [&](size_t index)
@@ -181,29 +180,44 @@ public:
         size_t pos = 0;
         while (pos < bytes.size())
         {
-            if (pos + 2 > bytes.size())
-                throw CsiDecodeError(path, pos, name(), "truncated record: 1 byte left");
-            const size_t length = readLE16(bytes.data() + pos);
-            if (pos + 2 + length > bytes.size())
+            const size_t length = pos + 2 <= bytes.size() ? readLE16(bytes.data() + pos) : 0;
+            if ((pos + 2 > bytes.size() || pos + 2 + length > bytes.size()) && summary.records == 0)
                 throw CsiDecodeError(
                     path, pos, name(),
-                    "truncated record: " + std::to_string(length) + " bytes announced, " +
-                        std::to_string(bytes.size() - pos - 2) + " left in the file");
+                    "the first record does not fit in the file (not an Atheros CSI Tool log, or "
+                    "cut inside its first record)");
+            if (pos + 2 > bytes.size() || pos + 2 + length > bytes.size())
+            {
+                summary.noteOnce(
+                    "the last record (byte " + std::to_string(pos) + ") is truncated: " +
+                    (pos + 2 > bytes.size() ? std::string("1 byte of its length")
+                                            : std::to_string(length) + " bytes announced, " +
+                                                  std::to_string(bytes.size() - pos - 2)) +
+                    " in the file (a capture that was stopped?); ignored");
+                break;
+            }
             ++summary.records;
             const size_t start = pos;
             AtherosRecord r;
-            std::string why;
-            if (!parseRecord(bytes.data() + pos + 2, length, r, why))
-                throw CsiDecodeError(path, start, name(), why);
+            std::string why, reason;
             pos += 2 + length;
             progress.update(pos, bytes.size());
+            if (!parseRecord(bytes.data() + start + 2, length, r, why, &reason))
+            {
+                rejectRecord(path, name(), options, summary, start, reason, why);
+                continue;
+            }
             if (r.csiLen == 0)
             {
                 ++summary.skipped;
                 continue;
             }
             auto obs = CObservationWiFiCSI::Create();
-            if (!toObservation(r, *obs, why)) throw CsiDecodeError(path, start, name(), why);
+            if (!toObservation(r, *obs, why))
+            {
+                rejectRecord(path, name(), options, summary, start, "no WiFi channel", why);
+                continue;
+            }
             obs->sensorLabel = options.assembler.sensorLabel;
             obs->sensorPose = options.assembler.sensorPose;
             obs->routerAddress = "file";

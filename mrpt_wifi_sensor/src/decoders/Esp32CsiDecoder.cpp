@@ -33,16 +33,21 @@ bool isCsiLine(std::string_view line)
     return line.substr(0, kTag.size()) == kTag;
 }
 
-bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
+bool parseLine(std::string_view line, Esp32Line& l, std::string& why, std::string* reason)
 {
     l = Esp32Line{};
+    const auto fail = [&](const std::string& cat, std::string text)
+    {
+        if (reason) *reason = cat;
+        why = std::move(text);
+        return false;
+    };
     const size_t open = line.find('[');
     const size_t close = line.find(']', open == std::string_view::npos ? 0 : open);
     if (!isCsiLine(line) || open == std::string_view::npos || close == std::string_view::npos)
-    {
-        why = "not a CSI_DATA line with a [..] buffer (truncated?)";
-        return false;
-    }
+        return fail(
+            "no [..] buffer (truncated line?)",
+            "not a CSI_DATA line with a [..] buffer (truncated?)");
     std::vector<std::string_view> f;
     std::string_view meta = line.substr(0, open);
     while (!meta.empty())
@@ -75,25 +80,25 @@ bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
             iLen = 12;
             break;
         default:
-            why = "unknown CSI_DATA layout with " + std::to_string(f.size()) +
-                  " metadata fields (known: 14, 24, 25)";
-            return false;
+            return fail(
+                "unknown CSI_DATA layout",
+                std::to_string(f.size()) + " metadata fields (known: 14, 24, 25)");
     }
     const auto field = [&](unsigned i, auto& v, const char* what)
     {
         if (toNumber(f[i], v)) return true;
-        why = std::string("field ") + std::to_string(i) + " (" + what + ") '" + std::string(f[i]) +
-              "' is not a number";
-        return false;
+        return fail(
+            std::string("field ") + what + " is not a number",
+            std::string("field ") + std::to_string(i) + " (" + what + ") '" + std::string(f[i]) +
+                "' is not a number");
     };
     if (iSeq >= 0 && !field(unsigned(iSeq), l.seq, "seq")) return false;
     if (const auto mac = MacAddress::parse(f[iMac]))
         l.mac = *mac;
     else
-    {
-        why = "field 2 '" + std::string(f[iMac]) + "' is not a MAC address";
-        return false;
-    }
+        return fail(
+            "field mac is not a MAC address",
+            "field 2 '" + std::string(f[iMac]) + "' is not a MAC address");
     if (!field(iRssi, l.rssi, "rssi") || !field(iNoise, l.noiseFloor, "noise_floor") ||
         !field(iChannel, l.channel, "channel") || !field(iTime, l.localTimestamp_us, "timestamp") ||
         !field(iLen, l.len, "len"))
@@ -115,6 +120,10 @@ bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
             return false;
         l.hasPacketInfo = true;
         l.firstWordInvalid = fwi != 0;
+        // ESP32-CSI-Tool's rows don't carry first_word_invalid; the ESP32 reports it set (its
+        // first four buffer bytes are not CSI: constant across rows in the tool's samples).
+        l.firstWordAssumed = l.metadataFields == 25;
+        if (l.firstWordAssumed) l.firstWordInvalid = true;
     }
     std::string_view data = line.substr(open + 1, close - open - 1);
     while (!data.empty())
@@ -125,20 +134,20 @@ bool parseLine(std::string_view line, Esp32Line& l, std::string& why)
         const size_t end = data.find_first_of(" ,");
         int v = 0;
         if (!toNumber(data.substr(0, end), v) || v < -128 || v > 127)
-        {
-            why = "CSI value '" + std::string(data.substr(0, end)) + "' is not an int8";
-            return false;
-        }
+            return fail(
+                "a CSI value is not an int8",
+                "CSI value '" + std::string(data.substr(0, end)) + "' is not an int8");
         l.values.push_back(int8_t(v));
         if (end == std::string_view::npos) break;
         data.remove_prefix(end);
     }
-    if (l.values.size() != l.len)
-    {
-        why = "len says " + std::to_string(l.len) + " values, the buffer has " +
-              std::to_string(l.values.size()) + " (truncated line?)";
-        return false;
-    }
+    if (l.values.size() < l.len && l.values.size() == kLltfValues)
+        l.shorterThanAnnounced = true;  // the L-LTF alone (ESP32-CSI-Tool)
+    else if (l.values.size() != l.len)
+        return fail(
+            "len disagrees with the values in the buffer", "len says " + std::to_string(l.len) +
+                                                               " values, the buffer has " +
+                                                               std::to_string(l.values.size()));
     return true;
 }
 
@@ -346,6 +355,7 @@ public:
         ProgressThrottle progress(onProgress);
         size_t pos = 0, lineNo = 0;
         uint64_t stbcLines = 0, wideLines = 0, htLines = 0;
+        bool saidShorter = false;
         while (pos < text.size())
         {
             size_t eol = text.find('\n', pos);
@@ -356,12 +366,41 @@ public:
             {
                 ++summary.records;
                 Esp32Line l;
-                std::string why;
+                std::string why, reason;
                 auto obs = CObservationWiFiCSI::Create();
-                if (!parseLine(line, l, why) ||
-                    !toObservation(l, *obs, why, options.esp32LegacyLtf))
-                    throw CsiDecodeError(
-                        path, pos, name(), "line " + std::to_string(lineNo) + ": " + why);
+                const bool parsed = parseLine(line, l, why, &reason);
+                if (parsed && !toObservation(l, *obs, why, options.esp32LegacyLtf))
+                    reason = "no valid channel or buffer";
+                if (!parsed && eol == text.size())
+                {
+                    // The last line, without its newline: a log cut off mid-line.
+                    summary.noteOnce(
+                        "the last line (" + std::to_string(lineNo) +
+                        ") is cut off (a capture that was stopped?); ignored: " + why);
+                    break;
+                }
+                if (!parsed || !reason.empty())
+                {
+                    rejectRecord(
+                        path, name(), options, summary, pos, reason, why,
+                        "line " + std::to_string(lineNo));
+                    pos = eol + 1;
+                    progress.update(pos, text.size());
+                    continue;
+                }
+                if (l.shorterThanAnnounced && !saidShorter)
+                {
+                    saidShorter = true;
+                    summary.noteOnce(
+                        "rows whose len announces " + std::to_string(l.len) + " values hold " +
+                        std::to_string(l.values.size()) + " (first at line " +
+                        std::to_string(lineNo) +
+                        ", as ESP32-CSI-Tool logs HT frames): read as the L-LTF only");
+                }
+                if (l.firstWordAssumed)
+                    summary.noteOnce(
+                        "ESP32-CSI-Tool rows don't say whether the buffer's first 4 bytes are "
+                        "CSI; the ESP32 reports them invalid (first_word_invalid): masked");
                 obs->sensorLabel = options.assembler.sensorLabel;
                 obs->sensorPose = options.assembler.sensorPose;
                 obs->routerAddress = "file";

@@ -38,13 +38,18 @@ double BfeeRecord::scaleFactor() const
     return f;
 }
 
-bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why)
+bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why, std::string* reason)
 {
-    if (len < kBfeeHeaderBytes)
+    const auto fail = [&](const char* category, std::string text)
     {
-        why = "beamforming record of " + std::to_string(len) + " bytes, shorter than its header";
+        if (reason) *reason = category;
+        why = std::move(text);
         return false;
-    }
+    };
+    if (len < kBfeeHeaderBytes)
+        return fail(
+            "beamforming record shorter than its header",
+            "beamforming record of " + std::to_string(len) + " bytes, shorter than its header");
     r = BfeeRecord{};
     r.timestampLow =
         uint32_t(d[0]) | uint32_t(d[1]) << 8 | uint32_t(d[2]) << 16 | uint32_t(d[3]) << 24;
@@ -58,20 +63,27 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why)
     const unsigned payloadLen = unsigned(d[16] | d[17] << 8);
     r.rate = uint16_t(d[18] | d[19] << 8);
     if (r.nRx < 1 || r.nRx > kMaxAntennas || r.nTx < 1 || r.nTx > kMaxAntennas)
-    {
-        why = "impossible antenna counts Nrx=" + std::to_string(r.nRx) +
-              " Ntx=" + std::to_string(r.nTx) + " (the 5300 has 1–3)";
-        return false;
-    }
+        return fail(
+            "impossible antenna counts", "Nrx=" + std::to_string(r.nRx) + " Ntx=" +
+                                             std::to_string(r.nTx) + " (the 5300 has 1–3)");
     const unsigned nPairs = unsigned(r.nRx) * r.nTx;
     const unsigned calcLen = (kSubcarriers * (nPairs * 8 * 2 + 3) + 7) / 8;
-    if (payloadLen != calcLen || len < kBfeeHeaderBytes + calcLen)
-    {
-        why = "beamforming payload of " + std::to_string(payloadLen) + " bytes (record holds " +
-              std::to_string(len - kBfeeHeaderBytes) + ") where Nrx=" + std::to_string(r.nRx) +
-              " Ntx=" + std::to_string(r.nTx) + " need " + std::to_string(calcLen);
-        return false;
-    }
+    const size_t held = len - kBfeeHeaderBytes;
+    const std::string sizes = "payload field " + std::to_string(payloadLen) + " bytes, record " +
+                              std::to_string(held) +
+                              " after the header, Nrx=" + std::to_string(r.nRx) +
+                              " Ntx=" + std::to_string(r.nTx) + " need " + std::to_string(calcLen);
+    if (payloadLen != calcLen || held < calcLen)
+        return fail("CSI payload size disagrees with the antenna counts", sizes);
+    // The record length must be header + payload exactly: anything between would be read as
+    // CSI (the WSR Toolbox's logger puts 18 bytes there).
+    if (held == calcLen + kWsrExtraBytes)
+        return fail(
+            "18 bytes between header and CSI: the WSR Toolbox's record variant (not read by this "
+            "decoder)",
+            sizes);
+    if (held != calcLen)
+        return fail("record length disagrees with its header and CSI payload", sizes);
     const uint8_t* p = d + kBfeeHeaderBytes;
     // read_bfee.c reads one byte past the payload for the last value; treat it as 0.
     const auto byteAt = [&](unsigned i) -> unsigned { return i < calcLen ? p[i] : 0u; };
@@ -158,7 +170,7 @@ public:
     {
         // Walk the records in the head: every length must fit and a 0xBB record must parse.
         size_t pos = 0;
-        bool sawBfee = false;
+        bool sawBfee = false, sawWsr = false;
         while (pos + 3 <= len)
         {
             const size_t fieldLen = size_t(head[pos] << 8 | head[pos + 1]);
@@ -168,13 +180,17 @@ public:
             if (code == kCodeBeamforming)
             {
                 BfeeRecord r;
-                std::string why;
-                if (!parseBfee(head + pos + 3, fieldLen - 1, r, why)) return 0;
-                sawBfee = true;
+                std::string why, reason;
+                // One good record is enough (a bad one after it is the decoder's to report);
+                // the WSR variant is recognised so that decoding can say what it is.
+                if (parseBfee(head + pos + 3, fieldLen - 1, r, why, &reason))
+                    sawBfee = true;
+                else if (reason.rfind("18 bytes between", 0) == 0)
+                    sawWsr = true;
             }
             pos += 2 + fieldLen;
         }
-        return sawBfee ? 90 : 0;
+        return sawBfee ? 90 : sawWsr ? 60 : 0;
     }
     void decodeFile(
         const std::string& path, const CsiDecodeOptions& options, const CsiFrameSink& onFrame,
@@ -192,12 +208,25 @@ public:
         {
             const size_t fieldLen = size_t(bytes[pos] << 8 | bytes[pos + 1]);
             const uint8_t code = bytes[pos + 2];
+            // Without a length the record boundaries are lost: nothing after can be trusted.
             if (fieldLen < 1) throw CsiDecodeError(path, pos, name(), "record of length 0");
-            if (pos + 2 + fieldLen > bytes.size())
+            if (pos + 2 + fieldLen > bytes.size() && summary.records == 0)
                 throw CsiDecodeError(
                     path, pos, name(),
-                    "truncated record: " + std::to_string(fieldLen) + " bytes announced, " +
-                        std::to_string(bytes.size() - pos - 2) + " left in the file");
+                    "the first record announces " + std::to_string(fieldLen) +
+                        " bytes, the file "
+                        "has " +
+                        std::to_string(bytes.size() - pos - 2) +
+                        " (not an Intel 5300 .dat, or cut inside its first record)");
+            if (pos + 2 + fieldLen > bytes.size())
+            {
+                summary.noteOnce(
+                    "the last record (byte " + std::to_string(pos) +
+                    ") is truncated: " + std::to_string(fieldLen) + " bytes announced, " +
+                    std::to_string(bytes.size() - pos - 2) +
+                    " in the file (a capture that was stopped?); ignored");
+                break;
+            }
             ++summary.records;
             if (code != kCodeBeamforming)
             {
@@ -206,9 +235,14 @@ public:
                 continue;
             }
             BfeeRecord r;
-            std::string why;
-            if (!parseBfee(bytes.data() + pos + 3, fieldLen - 1, r, why))
-                throw CsiDecodeError(path, pos, name(), why);
+            std::string why, reason;
+            if (!parseBfee(bytes.data() + pos + 3, fieldLen - 1, r, why, &reason))
+            {
+                rejectRecord(path, name(), options, summary, pos, reason, why);
+                pos += 2 + fieldLen;
+                progress.update(pos, bytes.size());
+                continue;
+            }
             Chanspec cs = options.chanspec ? *options.chanspec
                                            : Chanspec::make(r.ht40() ? 38 : 36, r.ht40() ? 40 : 20);
             if (cs.bandwidthMHz != (r.ht40() ? 40u : 20u))

@@ -42,6 +42,7 @@ public:
         CsiFileReadOptions o;
         o.assembler = options.assembler;
         o.udpPort = options.udpPort;
+        o.strict = options.strict;
         CsiFileReadSummary s;
         const auto fill = [&]
         {
@@ -51,6 +52,23 @@ public:
             // CsiDecodeSummary prints the frame count itself.
             if (const auto cut = summary.details.rfind("\nCSI frames:"); cut != std::string::npos)
                 summary.details.erase(cut);
+            // Datagrams the assembler rejected: skipped and counted, by reason.
+            summary.rejected.clear();
+            for (size_t r = 0; r < s.assembler.rejected.size(); ++r)
+                if (const uint64_t n = s.assembler.rejected[r])
+                {
+                    CsiRejectedRecords rr;
+                    rr.reason = std::string("Nexmon datagram rejected: ") +
+                                nexmon::toString(nexmon::RejectReason(r));
+                    rr.count = n;
+                    rr.firstOffset = s.firstRejectedOffset[r];
+                    rr.firstWhere = "byte " + std::to_string(rr.firstOffset);
+                    summary.rejected.push_back(rr);
+                }
+            if (s.pcap.truncatedTail)
+                summary.noteOnce(
+                    "the last record (byte " + std::to_string(s.pcap.truncatedTailOffset) +
+                    ") is truncated (a capture that was stopped?); ignored");
         };
         try
         {

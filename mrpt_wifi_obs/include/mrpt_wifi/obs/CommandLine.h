@@ -65,4 +65,8 @@ std::string exceptionMessage(const std::exception& e);
 /** Runs a program body, turning exceptions into a message on stderr and exit code 1. */
 int runMain(const std::string& program, const std::function<int()>& body);
 
+/** Exit status of a converter that finished the file but skipped malformed records (listed in
+ *  its summary); 1 is a failure, 0 a clean conversion. */
+constexpr int kExitRecordsSkipped = 3;
+
 }  // namespace mrpt_wifi::cli

@@ -42,7 +42,9 @@ struct AtherosRecord
 
 /** Parses the record body (the `length` bytes after the uint16 length). Never throws: false
  * with `why` for a body whose sizes don't add up, impossible antenna or tone counts. */
-bool parseRecord(const uint8_t* body, size_t length, AtherosRecord& out, std::string& why);
+bool parseRecord(
+    const uint8_t* body, size_t length, AtherosRecord& out, std::string& why,
+    std::string* reason = nullptr);
 
 /** Subcarrier of each reported tone, ascending: HT20 −28..−1, 1..28 (56 tones), HT40
  *  −58..−2, 2..58 (114). */

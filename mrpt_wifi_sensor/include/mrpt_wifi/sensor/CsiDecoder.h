@@ -25,6 +25,18 @@ struct CsiDecodeOptions
     /** ESP32 lines: keep the L-LTF even when the line also has an HT-LTF (by default the
      *  HT-LTF, and with STBC the second space-time stream's, is what the frame holds). */
     bool esp32LegacyLtf = false;
+    /** A malformed record stops the decode (CsiDecodeError) instead of being skipped and
+     *  counted in CsiDecodeSummary::rejected (`--strict` of the CLIs). */
+    bool strict = false;
+};
+
+/** Malformed records of one kind that a decode skipped (CsiDecodeOptions::strict off). */
+struct CsiRejectedRecords
+{
+    std::string reason;        //!< what was wrong, the same text for every record counted here
+    uint64_t count = 0;        //!< how many records
+    uint64_t firstOffset = 0;  //!< byte offset of the first (a line format: also its line)
+    std::string firstWhere;    //!< "byte N" or "line N" of the first
 };
 
 /** What a decode went through. */
@@ -36,6 +48,13 @@ struct CsiDecodeSummary
     uint64_t frames = 0;             //!< CSI frames delivered
     std::string details;             //!< format-specific counters, one line each
     std::vector<std::string> notes;  //!< assumptions the decoder made (e.g. a channel)
+    /** Malformed records skipped, by reason (empty with CsiDecodeOptions::strict: the first
+     *  one throws). A truncated last record (a capture that was killed) is a note instead. */
+    std::vector<CsiRejectedRecords> rejected;
+    /** Records in `rejected`, all reasons. */
+    uint64_t rejectedRecords() const;
+    /** Adds a note once (the same text again is not repeated). */
+    void noteOnce(const std::string& note);
     std::string asString() const;
 };
 
@@ -51,6 +70,15 @@ public:
     uint64_t offset = 0;
     std::string format;
 };
+
+/** A malformed record at `offset` (`where`: "byte N", or "line N" for line formats): with
+ *  options.strict throws CsiDecodeError, else counts it in summary.rejected under `reason`
+ *  (detail: this record's particulars, shown for the first of each reason) so the decoder can
+ *  go on with the next record. */
+void rejectRecord(
+    const std::string& path, const std::string& format, const CsiDecodeOptions& options,
+    CsiDecodeSummary& summary, uint64_t offset, const std::string& reason,
+    const std::string& detail = {}, const std::string& where = {});
 
 using CsiFrameSink = std::function<void(CObservationWiFiCSI::Ptr&&)>;
 using CsiProgress = std::function<void(double)>;
@@ -69,8 +97,11 @@ public:
     /** How sure the decoder is that a file starting with `head` (up to 4 KiB) is its format:
      *  0 = not mine, 100 = a magic number matched. */
     virtual int probe(const uint8_t* head, size_t len) const = 0;
-    /** Decodes the whole file in order. Throws CsiDecodeError (after delivering everything
-     *  before the fault) for malformed content; `summary` is filled either way. */
+    /** Decodes the whole file in order. A malformed record is skipped and counted
+     *  (rejectRecord), or with options.strict throws CsiDecodeError after delivering
+     *  everything before it; content that can't be resynchronised after (a broken file header,
+     *  a length field that loses the record boundaries) throws either way. `summary` is filled
+     *  either way. */
     virtual void decodeFile(
         const std::string& path, const CsiDecodeOptions& options, const CsiFrameSink& onFrame,
         const CsiProgress& onProgress, CsiDecodeSummary& summary) const = 0;

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
 
+#include <array>
 #include <functional>
 #include <string>
 
@@ -24,6 +25,9 @@ struct CsiFileReadOptions
 {
     CsiFrameAssemblerOptions assembler;          //!< for captures
     uint16_t udpPort = nexmon::kDefaultUdpPort;  //!< for captures (0: any port)
+    /** Captures: a datagram the assembler rejects stops the read (std::runtime_error naming
+     *  the file, its offset and the reason) instead of being counted. */
+    bool strict = false;
 };
 
 /** What a read went through. */
@@ -34,6 +38,9 @@ struct CsiFileReadSummary
     CsiFrameAssemblerStats assembler;  //!< captures only
     uint64_t rawlogObjects = 0;  //!< rawlogs only: objects read (observations, frames, actions)
     uint64_t frames = 0;         //!< CSI frames delivered
+    /** Captures: per nexmon::RejectReason, the file offset of the first datagram rejected for
+     *  it (valid where assembler.rejected[reason] > 0). */
+    std::array<uint64_t, size_t(nexmon::RejectReason::Count)> firstRejectedOffset{};
     std::string asString() const;
 };
 

@@ -39,14 +39,22 @@ struct Esp32Line
     unsigned cwb = 0;      //!< 0 20 MHz, 1 40 MHz
     unsigned stbc = 0;
     bool firstWordInvalid = false;  //!< the first four bytes of the buffer are not CSI
-    unsigned len = 0;               //!< int8 values announced
-    std::vector<int8_t> values;     //!< the buffer, imag then real per subcarrier
+    /** The layout has no first_word_invalid field (ESP32-CSI-Tool): firstWordInvalid is the
+     *  ESP32's usual true, assumed. */
+    bool firstWordAssumed = false;
+    unsigned len = 0;            //!< int8 values announced
+    std::vector<int8_t> values;  //!< the buffer, imag then real per subcarrier
+    /** `len` announced more than the line holds, and what it holds is exactly the L-LTF
+     *  (ESP32-CSI-Tool logs HT frames so): only the L-LTF is read. */
+    bool shorterThanAnnounced = false;
 };
 
 /** True for a line that is a CSI record (starts with CSI_DATA). */
 bool isCsiLine(std::string_view line);
-/** Parses one CSI_DATA line. Never throws: false with `why` for a malformed one. */
-bool parseLine(std::string_view line, Esp32Line& out, std::string& why);
+/** Parses one CSI_DATA line. Never throws: false with `why` (and `reason`, a short category
+ *  for counting) for a malformed one. */
+bool parseLine(
+    std::string_view line, Esp32Line& out, std::string& why, std::string* reason = nullptr);
 /** L-LTF subcarriers that carry a measurement (20 MHz channel): −26..−1, 1..26. */
 const std::vector<int>& lltfSubcarriers();
 

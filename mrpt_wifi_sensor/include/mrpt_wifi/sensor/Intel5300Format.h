@@ -44,9 +44,17 @@ struct BfeeRecord
     double scaleFactor() const;
 };
 
+/** Extra bytes the WSR Toolbox's CSI logger puts between the 20-byte header and the CSI of
+ *  its 0xBB records (a timestamp and the peer's MAC among them). */
+constexpr size_t kWsrExtraBytes = 18;
+
 /** Decodes the payload of a 0xBB record (the bytes after the code). Never throws: returns
- * false and sets `why` for impossible antenna counts or a length not matching them. */
-bool parseBfee(const uint8_t* data, size_t len, BfeeRecord& out, std::string& why);
+ * false and sets `why` (and `reason`, a short category for counting) for impossible antenna
+ * counts, a payload size not matching them, or a record longer than header + payload (the
+ * WSR Toolbox's variant among them: `reason` then names it). */
+bool parseBfee(
+    const uint8_t* data, size_t len, BfeeRecord& out, std::string& why,
+    std::string* reason = nullptr);
 
 /** Subcarrier indices of the 30 groups: Ng = 2 at 20 MHz, Ng = 4 at 40 MHz (802.11n). */
 const std::array<int, kSubcarriers>& groupedSubcarriers(bool ht40);

@@ -35,6 +35,9 @@ public:
         uint64_t skippedNotUdp = 0;     //!< IP but not UDP, or IP fragments
         uint64_t skippedOtherPort = 0;  //!< UDP to another port
         uint64_t skippedTruncated = 0;  //!< captured shorter than their headers say (snaplen)
+        /** The file ends inside a record (a capture that was stopped): read up to it. */
+        bool truncatedTail = false;
+        uint64_t truncatedTailOffset = 0;  //!< where that last record starts
     };
 
     /** Opens `path`; `udpPort` selects datagrams by destination port (0: any).
