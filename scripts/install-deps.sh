@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libpcap-dev
   openssh-server openssh-client tcpdump
   gnuplot-nox
+  librosbag-dev pluginlib-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
+  python3-rosbag python3-genpy python3-rostopic
   xvfb xauth libgl1-mesa-dri
 )
 

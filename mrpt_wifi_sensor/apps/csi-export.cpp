@@ -3,8 +3,13 @@
  * csi-export: writes the CSI frames of a capture or rawlog as JSON Lines, one object per
  * frame, for Python/MATLAB users. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/RawlogReader.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
+#if MRPT_WIFI_HAVE_ROSBAG
+#include <mrpt_wifi/sensor/RosBag.h>
+#endif
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
 #include <cinttypes>
@@ -62,6 +67,81 @@ void writeJsonLine(std::FILE* f, const CObservationWiFiCSI& o)
     }
     std::fputs("]}\n", f);
 }
+/** --bag: CSI (and a rawlog's bearings) as WiROS's messages. */
+int exportBag(
+    const std::string& in, const std::string& format, const CsiDecodeOptions& options,
+    const std::string& out, const std::string& rxId, bool showProgress)
+{
+#if MRPT_WIFI_HAVE_ROSBAG
+    ros1::BagWriter bag(out);
+    uint64_t csi = 0, bearings = 0;
+    const auto writeCsi = [&](const CObservationWiFiCSI& o)
+    {
+        const std::string id = !rxId.empty()              ? rxId
+                               : !o.routerAddress.empty() ? o.routerAddress
+                                                          : o.sensorLabel;
+        const auto m = ros1::fromObservation(o, id);
+        bag.write("/csi", mrpt::Clock::toDouble(o.timestamp), ros1::wifiType(), ros1::serialize(m));
+        ++csi;
+    };
+    cli::Progress progress("csi-export", showProgress);
+    const auto onProgress = [&](double f) {
+        progress.update(f, std::to_string(csi) + " CSI, " + std::to_string(bearings) + " bearings");
+    };
+    CsiDecodeSummary summary;
+    int rc = 0;
+    try
+    {
+        const auto decoder = format == "auto" ? CsiDecoderRegistry::instance().detect(in)
+                                              : CsiDecoderRegistry::instance().find(format);
+        if (decoder && decoder->name() == "rawlog")
+        {
+            // A rawlog may hold bearings too (csi-bearings' output): both go to the bag.
+            summary.format = "rawlog";
+            summary.records = forEachRawlogObservation(
+                in,
+                [&](const mrpt::obs::CObservation::Ptr& o)
+                {
+                    if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+                        writeCsi(*c), ++summary.frames;
+                    else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(o))
+                    {
+                        ros1::BearingMessage m;
+                        ros1::fromBearing(*b, m);
+                        bag.write(
+                            "/bearing", mrpt::Clock::toDouble(b->timestamp), ros1::bearingType(),
+                            ros1::serialize(m));
+                        ++bearings;
+                    }
+                },
+                onProgress);
+        }
+        else
+            decodeCsiFile(
+                in, format, options, [&](CObservationWiFiCSI::Ptr&& o) { writeCsi(*o); },
+                onProgress, &summary);
+        progress.done(std::to_string(csi) + " CSI, " + std::to_string(bearings) + " bearings");
+    }
+    catch (const std::exception& e)
+    {
+        std::cerr << "\ncsi-export: error: " << e.what() << "\n";
+        rc = 1;
+    }
+    bag.close();
+    std::cerr << summary.asString() << "\n"
+              << "Output: " << out << " (" << csi << " rf_msgs/Wifi on /csi, " << bearings
+              << " rf_msgs/Bearing on /bearing" << (rc ? ", kept valid up to the fault" : "")
+              << ")\n";
+    if (rc == 0 && summary.rejectedRecords() > 0) rc = cli::kExitRecordsSkipped;
+    return rc;
+#else
+    (void)in, (void)format, (void)options, (void)rxId, (void)showProgress;
+    throw std::runtime_error(
+        "--bag " + out +
+        ": this build has no ROS 1 bag support (install librosbag-dev: "
+        "scripts/install-deps.sh, then rebuild)");
+#endif
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -72,7 +152,8 @@ int main(int argc, char** argv)
         {
             TCLAP::CmdLine cmd(
                 "Exports the CSI frames of a capture in any supported format (Nexmon pcap of any "
-                "chip, Intel 5300 .dat, ESP32 CSI_DATA lines) or an mrpt_wifi rawlog as JSON "
+                "chip, Intel 5300 .dat, ESP32 CSI_DATA lines, WiROS ROS 1 bags) or an mrpt_wifi "
+                "rawlog as JSON "
                 "Lines: one object per frame with timestamp, seq, mac, rssi, chanspec, channel, "
                 "bw, nfft, chip, n_rx, n_tx, present[tx][rx], source, subcarriers (the indices k "
                 "that carry a measurement), rssi_antennas, noise_floor / agc / csi_scale when "
@@ -88,6 +169,17 @@ int main(int argc, char** argv)
                 "", "stats",
                 "Instead of exporting: frames per transmitter and channel, complete and incomplete",
                 cmd);
+            TCLAP::ValueArg<std::string> argBag(
+                "", "bag",
+                "Output ROS 1 bag as WiROS records it: rf_msgs/Wifi on /csi (and, from a rawlog, "
+                "its CObservationWiFiBearing as rf_msgs/Bearing on /bearing: aoa = [AoA in the "
+                "receive array's frame, rad])",
+                false, "", "OUT.bag", cmd);
+            TCLAP::ValueArg<std::string> argRxId(
+                "", "rx-id",
+                "With --bag: rx_id of the messages (default: each frame's router address, else "
+                "its sensor label)",
+                false, "", "ID", cmd);
             TCLAP::ValueArg<std::string> argFormat(
                 "f", "format",
                 "Input format (or the Nexmon header variant): " + formatOptionChoices(), false,
@@ -120,8 +212,13 @@ int main(int argc, char** argv)
             if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
 
-            if (argJsonl.isSet() == argStats.isSet())
-                throw std::invalid_argument("give exactly one of --jsonl OUT and --stats");
+            if (int(argJsonl.isSet()) + int(argStats.isSet()) + int(argBag.isSet()) != 1)
+                throw std::invalid_argument(
+                    "give exactly one of --jsonl OUT, --stats and --bag OUT");
+            if (argBag.isSet())
+                return exportBag(
+                    argIn.getValue(), format, options, argBag.getValue(), argRxId.getValue(),
+                    !argQuiet.getValue());
             const bool toStdout = argStats.isSet() || argJsonl.getValue() == "-";
             std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(
                 toStdout ? stdout : std::fopen(argJsonl.getValue().c_str(), "w"),

@@ -32,8 +32,8 @@ int main(int argc, char** argv)
                     formats,
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(
-                "input", "Input capture (.pcap, .pcapng, .dat, .csv/.txt of CSI_DATA lines)", true,
-                "", "IN", cmd);
+                "input", "Input capture (.pcap, .pcapng, .dat, .csv/.txt of CSI_DATA lines, .bag)",
+                true, "", "IN", cmd);
             TCLAP::UnlabeledValueArg<std::string> argOut(
                 "output", "Output rawlog", true, "", "OUT.rawlog", cmd);
             TCLAP::ValueArg<std::string> argLabel(
