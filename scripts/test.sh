@@ -2,8 +2,9 @@
 # Installs what is needed, builds, and runs every test:
 #   1. the GoogleTest suites and integration tests with Debian's MRPT apps (Release build);
 #   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer;
-#   3. the libFuzzer targets (clang): the Nexmon parser + frame assembler and one per CSI file
-#      decoder (nexmon, intel5300, esp32, atheros), FUZZ_SECONDS split between them.
+#   3. the libFuzzer targets (clang): the Nexmon parser + frame assembler, one per CSI file
+#      decoder (nexmon, intel5300, esp32, atheros) and WiROS's ROS messages, FUZZ_SECONDS split
+#      between them.
 # Ends with one line "summary: N passed, N failed". Exit code non-zero if anything failed.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -39,6 +40,8 @@ debug_lines=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DCMAKE_C_FLAGS
 # TxChainCalibration.RecoversInjectedOffsetsFromTruePoses (which does run): step 1 runs them.
 asan_skip="TxChainCalibration[.](AodOnlyWhereCalibratedAndHonestSigma|ReceiverFromDriftingOdometryWithin3Degrees)"
 asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization"
+# The decoders' length-check seeds, replayed instrumented (FuzzSeeds.*).
+asan_targets="$asan_targets fuzz_make_seeds fuzz_replay_nexmon fuzz_replay_intel5300 fuzz_replay_esp32 fuzz_replay_atheros fuzz_replay_rosmessages"
 if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" -DMRPT_WIFI_SANITIZE=ON \
      -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null &&
    cmake --build build-asan -j"$(nproc)" --target $asan_targets; then
@@ -52,7 +55,7 @@ fi
 
 # The fuzz time is split between the assembler and one target per file decoder, so the total
 # stays FUZZ_SECONDS.
-fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros"
+fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros fuzz_ros_messages"
 per_target=$(( FUZZ_SECONDS / 5 > 0 ? FUZZ_SECONDS / 5 : 1 ))
 echo "== [3/3] libFuzzer: Nexmon assembler + nexmon/intel5300/esp32/atheros decoders, ${per_target} s each"
 if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" \
@@ -68,6 +71,7 @@ if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Rel
       fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" intel5300 tests/data ;;
       fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" esp32 tests/data ;;
       fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" atheros tests/data ;;
+      fuzz_ros_messages) build-fuzz/bin/fuzz_make_seeds "$corpus" rosmessages tests/data ;;
     esac
     # Any non-pcap input is read as a rawlog, so the fuzzer reaches every class in MRPT's
     # registry, and MRPT's own readers allocate whatever a damaged count claims (this project's

@@ -132,8 +132,7 @@ int exportBag(
               << "Output: " << out << " (" << csi << " rf_msgs/Wifi on /csi, " << bearings
               << " rf_msgs/Bearing on /bearing" << (rc ? ", kept valid up to the fault" : "")
               << ")\n";
-    if (rc == 0 && summary.rejectedRecords() > 0) rc = cli::kExitRecordsSkipped;
-    return rc;
+    return conversionExitStatus(rc, summary, "csi-export");
 #else
     (void)in, (void)format, (void)options, (void)rxId, (void)showProgress;
     throw std::runtime_error(
@@ -194,12 +193,7 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<unsigned> argPort(
                 "p", "port", "UDP port of the CSI datagrams in captures (0: any)", false, 5500,
                 "PORT", cmd);
-            TCLAP::SwitchArg argStrict(
-                "", "strict",
-                "Stop at the first malformed record (exit 1; what came before is kept) instead of "
-                "skipping it: by default malformed records are skipped and counted by reason, "
-                "the file is finished, and the exit status is 3 when anything was skipped",
-                cmd);
+            TCLAP::SwitchArg argStrict("", "strict", kStrictOptionHelp, cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
@@ -271,13 +265,6 @@ int main(int argc, char** argv)
                     total.incomplete);
             }
             std::cerr << summary.asString() << "\n";
-            if (rc == 0 && summary.rejectedRecords() > 0)
-            {
-                std::cerr << "csi-export: " << summary.rejectedRecords()
-                          << " malformed records skipped (listed above; --strict stops at the "
-                             "first)\n";
-                rc = cli::kExitRecordsSkipped;
-            }
-            return rc;
+            return conversionExitStatus(rc, summary, "csi-export");
         });
 }

@@ -65,12 +65,7 @@ int main(int argc, char** argv)
                 "ESP32 lines: keep the L-LTF (52 subcarriers) even when the line has an HT-LTF "
                 "(by default the HT-LTF, and with STBC both space-time streams)",
                 cmd);
-            TCLAP::SwitchArg argStrict(
-                "", "strict",
-                "Stop at the first malformed record (exit 1; what came before is kept) instead of "
-                "skipping it: by default malformed records are skipped and counted by reason, "
-                "the file is finished, and the exit status is 3 when anything was skipped",
-                cmd);
+            TCLAP::SwitchArg argStrict("", "strict", kStrictOptionHelp, cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
 
             cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
@@ -129,13 +124,6 @@ int main(int argc, char** argv)
                       << "Output: " << argOut.getValue() << " (" << written
                       << " CObservationWiFiCSI" << (rc ? ", kept valid up to the fault" : "")
                       << ")\n";
-            if (rc == 0 && summary.rejectedRecords() > 0)
-            {
-                std::cerr << program << ": " << summary.rejectedRecords()
-                          << " malformed records skipped (listed above; --strict stops at the "
-                             "first)\n";
-                rc = cli::kExitRecordsSkipped;
-            }
-            return rc;
+            return conversionExitStatus(rc, summary, program);
         });
 }

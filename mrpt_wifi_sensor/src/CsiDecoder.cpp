@@ -1,8 +1,10 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 
 #include <algorithm>
 #include <fstream>
+#include <iostream>
 #include <mutex>
 #include <sstream>
 
@@ -42,6 +44,19 @@ std::string CsiDecodeSummary::asString() const
           << r.reason << " (first at " << r.firstWhere << ")";
     o << "\nCSI frames: " << frames;
     return o.str();
+}
+
+const char* const kStrictOptionHelp =
+    "Stop at the first malformed record (exit 1; what came before is kept) instead of skipping "
+    "it: by default malformed records are skipped and counted by reason, the file is finished, "
+    "and the exit status is 3 when anything was skipped";
+
+int conversionExitStatus(int rc, const CsiDecodeSummary& summary, const std::string& program)
+{
+    if (rc != 0 || summary.rejectedRecords() == 0) return rc;
+    std::cerr << program << ": " << summary.rejectedRecords()
+              << " malformed records skipped (listed above; --strict stops at the first)\n";
+    return cli::kExitRecordsSkipped;
 }
 
 void rejectRecord(

@@ -4,9 +4,11 @@
 //   fuzz_make_seeds DIR FORMAT DATA_DIR   fuzz_decoder_FORMAT: the sample files of
 //                                         DATA_DIR/FORMAT plus one file per length check of
 //                                         that decoder (a declared length that disagrees
-//                                         with the bytes), so the fuzzer starts at each.
+//                                         with the bytes), so the fuzzer starts at each;
+//                                         FORMAT rosmessages: rf_msgs/Wifi and Bearing bytes
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
+#include <mrpt_wifi/sensor/RosMessages.h>
 
 #include <filesystem>
 #include <fstream>
@@ -139,6 +141,28 @@ std::map<std::string, Bytes> nexmonCases(const fs::path& tmp)
     fs::remove(tmp / "full.pcap");
     return c;
 }
+/** rf_msgs/Wifi and rf_msgs/Bearing bytes: valid ones, and each declared size disagreeing. */
+std::map<std::string, Bytes> rosMessageCases()
+{
+    std::map<std::string, Bytes> c;
+    const auto wifi = ros1::fromObservation(*test::syntheticFrame(2, 2, 20, 3), "rx");
+    c["wifi-valid"] = ros1::serialize(wifi);
+    auto shortCsi = wifi;
+    shortCsi.csiImag.resize(shortCsi.csiImag.size() - 1);
+    c["wifi-csi-shorter-than-n_sub-rows-cols"] = ros1::serialize(shortCsi);
+    auto nsub = wifi;
+    nsub.nSub = 128;  // not 20 MHz's FFT size
+    c["wifi-n_sub-vs-bw"] = ros1::serialize(nsub);
+    Bytes cut = ros1::serialize(wifi);
+    cut.resize(cut.size() / 2);
+    c["wifi-cut"] = cut;
+    ros1::BearingMessage b;
+    b.txmac = {2, 0, 0, 0, 10, 1};
+    b.rssi = {-40};
+    b.aoa = {0.5};
+    c["bearing-valid"] = ros1::serialize(b);
+    return c;
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -174,12 +198,15 @@ int main(int argc, char** argv)
             readFile(data / "esp32-csi-tool" / "example_data.first20.csv"));
     else if (format == "nexmon")
         cases = nexmonCases(dir);
+    else if (format == "rosmessages")
+        cases = rosMessageCases();
     else
     {
         std::cerr << "fuzz_make_seeds: unknown format '" << format << "'\n";
         return 1;
     }
-    for (const auto& [name, bytes] : cases) writeFile(dir / ("length-check-" + name), bytes);
+    for (const auto& [name, bytes] : cases)
+        writeFile(dir / ((format == "rosmessages" ? "" : "length-check-") + name), bytes);
     std::cout << "wrote " << cases.size() << " length-check seeds for " << format << " to "
               << dir.string() << "\n";
     return 0;

@@ -80,6 +80,13 @@ void rejectRecord(
     CsiDecodeSummary& summary, uint64_t offset, const std::string& reason,
     const std::string& detail = {}, const std::string& where = {});
 
+/** Help text of the converters' `--strict` switch (the same in every program). */
+extern const char* const kStrictOptionHelp;
+/** A converter's exit status for a decode that ended without error (`rc` 0) or with one (`rc`
+ *  1, returned as is): cli::kExitRecordsSkipped, with one line on stderr, when malformed
+ *  records were skipped; 0 otherwise. */
+int conversionExitStatus(int rc, const CsiDecodeSummary& summary, const std::string& program);
+
 using CsiFrameSink = std::function<void(CObservationWiFiCSI::Ptr&&)>;
 using CsiProgress = std::function<void(double)>;
 
