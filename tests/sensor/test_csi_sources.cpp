@@ -904,7 +904,7 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
     test::TempDir tmp;
     for (const char* file :
          {"intel5300/log.all_csi.6.7.6.dat", "esp32/csi_data.csv", "nexmon/bcm43455c0-80mhz.pcap",
-          "atheros/ath_csi_1.first8.dat"})
+          "atheros/ath_csi_1.first8.dat", "esp32-csi-tool/example_data.first20.csv"})
     {
         const std::string rawlog = tmp.file("out.rawlog");
         const auto imp = test::run(test::binDir() + "/csi-import -q " + data(file) + " " + rawlog);
@@ -914,6 +914,13 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
         EXPECT_NE(exp.output.find("\"source\":"), std::string::npos);
         EXPECT_NE(exp.output.find("\"subcarriers\":["), std::string::npos);
     }
+    // ESP32-CSI-Tool (issue 20.1: both programs stopped at row 2): every row, straight from the
+    // log.
+    const auto tool = test::run(
+        test::binDir() + "/csi-export -q --jsonl " + tmp.file("tool.jsonl") + " " +
+        data("esp32-csi-tool/example_data.first20.csv"));
+    EXPECT_EQ(tool.exitCode, 0) << tool.output;
+    EXPECT_NE(tool.output.find("CSI frames: 20"), std::string::npos) << tool.output;
     const auto j = test::run(
         test::binDir() + "/csi-export -q --jsonl - " + data("intel5300/log.all_csi.6.7.6.dat"));
     EXPECT_EQ(j.exitCode, 0);
