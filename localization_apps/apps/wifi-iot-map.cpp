@@ -200,6 +200,9 @@ int main(int argc, char** argv)
                 go.loss = argLoss.getValue();
                 go.odoSigmaXY_perSqrtM = argOdoSigma.getValue();
                 go.odoSigmaYaw_perSqrtM = 0.0175 * argOdoSigma.getValue() / 0.02;
+                if (argScaleStd.getValue() < 0 || argYawDriftStd.getValue() < 0)
+                    throw std::invalid_argument(
+                        "--odometry-scale-std and --odometry-yaw-drift-std must be >= 0");
                 go.bearingDecorrelation_m = argDecorrelation.getValue();
                 go.odoScaleStd = argScaleStd.getValue();
                 go.odoYawDriftStd_radPerM = mrpt::DEG2RAD(argYawDriftStd.getValue());
@@ -311,17 +314,12 @@ int main(int argc, char** argv)
                 {
                     const double ex = d.x - t->pose.x, ey = d.y - t->pose.y;
                     errs.push_back(std::hypot(ex, ey));
-                    // Mahalanobis distance² of the truth; χ²(2 dof) 95 % = 5.991.
-                    const double det = d.cov[0] * d.cov[2] - d.cov[1] * d.cov[1];
-                    const double d2 =
-                        det > 0
-                            ? (d.cov[2] * ex * ex - 2 * d.cov[1] * ex * ey + d.cov[0] * ey * ey) /
-                                  det
-                            : INFINITY;
-                    insideEllipse += d2 <= 5.991;
+                    const bool inside =
+                        mahalanobis2(d.cov[0], d.cov[1], d.cov[2], ex, ey) <= kChi2TwoDof95;
+                    insideEllipse += inside;
                     std::snprintf(
                         buf, sizeof(buf), "  error=%.2f m (%s its 95 %% ellipse)", errs.back(),
-                        d2 <= 5.991 ? "inside" : "OUTSIDE");
+                        inside ? "inside" : "OUTSIDE");
                     sum << buf;
                 }
                 if (!d.note.empty()) sum << "  (" << d.note << ")";
@@ -361,9 +359,8 @@ int main(int argc, char** argv)
                 {
                     if (!d.localized) continue;
                     est.x.push_back(d.x), est.y.push_back(d.y);
-                    // 95% region of a 2-D Gaussian: k = sqrt(chi2_2(0.95)) = 2.4477.
                     f.series.push_back(plot::ellipse(
-                        d.x, d.y, d.cov[0], d.cov[1], d.cov[2], 2.4477, "",
+                        d.x, d.y, d.cov[0], d.cov[1], d.cov[2], std::sqrt(kChi2TwoDof95), "",
                         "lines lw 1 lc rgb '#d62728'"));
                     f.extra.push_back(
                         "set label '" + (d.name.empty() ? d.mac.asString() : d.name) + "' at " +

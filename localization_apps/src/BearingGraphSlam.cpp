@@ -389,9 +389,7 @@ GraphSlamResult solveOnce(
         for (const auto& a : att)
         {
             const auto s = compose(TPose2D(X[a.node][0], X[a.node][1], X[a.node][2]), a.offset);
-            cells[a.b->transmitter].emplace(
-                long(std::floor(s.x / opt.bearingDecorrelation_m)),
-                long(std::floor(s.y / opt.bearingDecorrelation_m)));
+            cells[a.b->transmitter].insert(decorrelationCell(s.x, s.y, opt.bearingDecorrelation_m));
             count[a.b->transmitter]++;
         }
         for (const auto& [mac, c] : cells)

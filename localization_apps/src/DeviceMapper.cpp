@@ -77,6 +77,18 @@ void addOdometryDrift(
         }
 }
 
+double mahalanobis2(double xx, double xy, double yy, double ex, double ey)
+{
+    const double det = xx * yy - xy * xy;
+    if (!(det > 0) || !(xx > 0)) return INFINITY;
+    return (yy * ex * ex - 2 * xy * ex * ey + xx * ey * ey) / det;
+}
+
+std::pair<long, long> decorrelationCell(double x, double y, double size)
+{
+    return {long(std::floor(x / size)), long(std::floor(y / size))};
+}
+
 DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const DeviceMapOptions& o)
 {
     DeviceEstimate d;
@@ -170,9 +182,7 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
             const double sg = o.model.sigma(rays[i].sigma);
             if (res[i] >= o.inlierSigmas * sg) continue;
             if (o.decorrelation_m > 0)
-                cells.emplace(
-                    long(std::floor(rays[i].x / o.decorrelation_m)),
-                    long(std::floor(rays[i].y / o.decorrelation_m)));
+                cells.insert(decorrelationCell(rays[i].x, rays[i].y, o.decorrelation_m));
             else
                 cells.emplace(long(i), 0L);  // every bearing independent
             chi2 += (res[i] / sg) * (res[i] / sg);

@@ -106,11 +106,9 @@ int exportBag(
                         writeCsi(*c), ++summary.frames;
                     else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(o))
                     {
-                        ros1::BearingMessage m;
-                        ros1::fromBearing(*b, m);
                         bag.write(
                             "/bearing", mrpt::Clock::toDouble(b->timestamp), ros1::bearingType(),
-                            ros1::serialize(m));
+                            ros1::serialize(ros1::fromBearing(*b)));
                         ++bearings;
                     }
                 },

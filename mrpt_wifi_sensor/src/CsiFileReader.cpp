@@ -39,20 +39,15 @@ void readCapture(
         {
             // Capture time drives the timeout, so a replay assembles exactly as live capture.
             assembler.flushExpired(d.timestamp);
-            const auto before = assembler.stats().rejected;
-            if (!assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress))
+            nexmon::RejectReason why{};
+            if (!assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress, &why))
             {
-                const auto& after = assembler.stats().rejected;
-                for (size_t r = 0; r < after.size(); ++r)
-                {
-                    if (after[r] == before[r]) continue;
-                    if (options.strict)
-                        throw std::runtime_error(
-                            "'" + path + "' at byte " + std::to_string(d.fileOffset) +
-                            ": datagram rejected (" + nexmon::toString(nexmon::RejectReason(r)) +
-                            ")");
-                    if (before[r] == 0) summary.firstRejectedOffset[r] = d.fileOffset;
-                }
+                if (options.strict)
+                    throw std::runtime_error(
+                        "'" + path + "' at byte " + std::to_string(d.fileOffset) +
+                        ": datagram rejected (" + nexmon::toString(why) + ")");
+                if (assembler.stats().rejected[size_t(why)] == 1)
+                    summary.firstRejectedOffset[size_t(why)] = d.fileOffset;
             }
             progress.update(reader.position(), reader.fileSize());
         }

@@ -160,21 +160,21 @@ size_t CsiFrameAssembler::pendingFrames() const
 }
 
 bool CsiFrameAssembler::push(
-    const uint8_t* data, size_t len, mrpt::Clock::time_point arrival, const std::string& source)
+    const uint8_t* data, size_t len, mrpt::Clock::time_point arrival, const std::string& source,
+    nexmon::RejectReason* whyOut)
 {
+    const auto reject = [&](nexmon::RejectReason why)
+    {
+        ++stats_.rejected[size_t(why)];
+        if (whyOut) *whyOut = why;
+        return false;
+    };
     ++stats_.datagrams;
     nexmon::DatagramHeader h;
     nexmon::RejectReason why{};
-    if (!nexmon::parseHeader(data, len, options_.format, h, why))
-    {
-        ++stats_.rejected[size_t(why)];
-        return false;
-    }
+    if (!nexmon::parseHeader(data, len, options_.format, h, why)) return reject(why);
     if (!((options_.coreMask >> h.core) & 1u) || !((options_.streamMask >> h.stream) & 1u))
-    {
-        ++stats_.rejected[size_t(nexmon::RejectReason::BadCoreStream)];
-        return false;
-    }
+        return reject(nexmon::RejectReason::BadCoreStream);
 
     auto it = transmitters_.find(h.transmitter);
     if (it == transmitters_.end())
@@ -214,8 +214,7 @@ bool CsiFrameAssembler::push(
     {
         // A core the frame's first datagram did not announce (UbiLocate masks disagreeing
         // within one frame): no room for it in this frame's layout. Found by the fuzzer.
-        ++stats_.rejected[size_t(nexmon::RejectReason::BadCoreStream)];
-        return false;
+        return reject(nexmon::RejectReason::BadCoreStream);
     }
     if (h.stream >= obs.nTx)
     {

@@ -77,14 +77,12 @@ BagWriter::~BagWriter()
 }
 
 void BagWriter::write(
-    const std::string& topic, double time, const MessageType& type,
-    const std::vector<uint8_t>& bytes)
+    const std::string& topic, double time, const MessageType& type, std::vector<uint8_t> bytes)
 {
     // ShapeShifter carries bytes whose type is known only at run time (no generated header).
     topic_tools::ShapeShifter msg;
     msg.morph(type.md5, type.datatype, type.definition, "");
-    std::vector<uint8_t> copy = bytes;
-    ros::serialization::IStream in(copy.data(), uint32_t(copy.size()));
+    ros::serialization::IStream in(bytes.data(), uint32_t(bytes.size()));
     msg.read(in);
     ros::Time stamp;
     stamp.fromSec(std::max(time, 1e-9));  // ROS rejects time 0 in bags

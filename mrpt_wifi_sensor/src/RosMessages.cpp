@@ -337,15 +337,15 @@ WifiMessage fromObservation(const CObservationWiFiCSI& obs, const std::string& r
     return m;
 }
 
-bool fromBearing(const CObservationWiFiBearing& b, BearingMessage& m)
+BearingMessage fromBearing(const CObservationWiFiBearing& b)
 {
-    m = BearingMessage{};
+    BearingMessage m;
     m.header = headerAt(b.timestamp);
     m.txmac = macBytes(b.transmitter);
     m.nRx = 0, m.nTx = 0;  // the bearing does not carry the array sizes
     m.rssi = {int32_t(b.rssi_dBm)};
     m.aoa = {b.aoa_rad};
-    return true;
+    return m;
 }
 
 }  // namespace mrpt_wifi::ros1

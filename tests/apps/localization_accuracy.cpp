@@ -19,6 +19,7 @@
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
@@ -485,8 +486,7 @@ void runLoop(Room& room, const fs::path& dir)
         dv.estimates.push_back({x, y, a, b, cc});
         const double ex = x - t->pose.x, ey = y - t->pose.y;
         errs.push_back(std::hypot(ex, ey));
-        const double d2 = (cc * ex * ex - 2 * b * ex * ey + a * ey * ey) / (a * cc - b * b);
-        dv.inside += d2 <= 5.991;  // χ², 2 dof, 95 %
+        dv.inside += mahalanobis2(a, b, cc, ex, ey) <= kChi2TwoDof95;
     }
     // A device the mapper could not place counts as outside its ellipse.
     dv.insideShare = dv.devices ? double(dv.inside) / double(dv.devices) : NAN;
@@ -801,7 +801,8 @@ void drawRoom(const Room& r, const fs::path& dir)
         {
             dev.x.push_back(d[0]), dev.y.push_back(d[1]);
             f.series.push_back(plot::ellipse(
-                d[0], d[1], d[2], d[3], d[4], std::sqrt(5.991), "", "lines lw 1 lc rgb '#e377c2'"));
+                d[0], d[1], d[2], d[3], d[4], std::sqrt(kChi2TwoDof95), "",
+                "lines lw 1 lc rgb '#e377c2'"));
         }
         f.series.push_back(dev);
         if (!plot::savePng(

@@ -3,6 +3,7 @@
 #include <mrpt/poses/CPosePDFGaussianInf.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingGraphSlam.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 
 #include "SyntheticWorld.h"
 #include "TestSupport.h"
@@ -334,17 +335,18 @@ TEST(GraphSlamUnknownAps, ApCovarianceCoversMultipathAndOdometryBias)
                 const double c = std::cos(start.phi()), s = std::sin(start.phi());
                 const double u = c * ex + s * ey, v = -s * ex + c * ey;
                 const auto& C = r.apCov[j];
-                const double d2 =
-                    (C[2] * u * u - 2 * C[1] * u * v + C[0] * v * v) / (C[0] * C[2] - C[1] * C[1]);
-                inside[honest] += d2 <= 5.991;  // chi2, 2 dof, 95 %
+                const double d2 = mahalanobis2(C[0], C[1], C[2], u, v);
+                inside[honest] += d2 <= kChi2TwoDof95;
                 aps += honest;
                 std::cout << "seed " << seed << (honest ? " honest " : " naive  ") << ap.name
                           << ": error " << std::hypot(ex, ey) << " m, sigma "
                           << std::sqrt(0.5 * (C[0] + C[2])) << " m, d2 " << d2 << "\n";
             }
             if (honest)
+            {
                 EXPECT_NEAR(mrpt::RAD2DEG(r.odometryYawDrift_radPerM), -0.4, 0.2)
                     << "seed " << seed << " (the odometry turns 0.4 deg/m too far)";
+            }
         }
     }
     EXPECT_GE(inside[1], aps - 1) << "decorrelated, biases estimated: " << inside[1] << " of "

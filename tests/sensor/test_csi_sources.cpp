@@ -916,11 +916,11 @@ TEST(CsiSourcesCli, ImportAndExportEveryFormat)
     }
     // ESP32-CSI-Tool (issue 20.1: both programs stopped at row 2): every row, straight from the
     // log.
-    const auto tool = test::run(
+    const auto csiTool = test::run(
         test::binDir() + "/csi-export -q --jsonl " + tmp.file("tool.jsonl") + " " +
         data("esp32-csi-tool/example_data.first20.csv"));
-    EXPECT_EQ(tool.exitCode, 0) << tool.output;
-    EXPECT_NE(tool.output.find("CSI frames: 20"), std::string::npos) << tool.output;
+    EXPECT_EQ(csiTool.exitCode, 0) << csiTool.output;
+    EXPECT_NE(csiTool.output.find("CSI frames: 20"), std::string::npos) << csiTool.output;
     const auto j = test::run(
         test::binDir() + "/csi-export -q --jsonl - " + data("intel5300/log.all_csi.6.7.6.dat"));
     EXPECT_EQ(j.exitCode, 0);

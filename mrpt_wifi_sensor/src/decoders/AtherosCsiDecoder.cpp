@@ -180,19 +180,20 @@ public:
         size_t pos = 0;
         while (pos < bytes.size())
         {
-            const size_t length = pos + 2 <= bytes.size() ? readLE16(bytes.data() + pos) : 0;
-            if ((pos + 2 > bytes.size() || pos + 2 + length > bytes.size()) && summary.records == 0)
-                throw CsiDecodeError(
-                    path, pos, name(),
-                    "the first record does not fit in the file (not an Atheros CSI Tool log, or "
-                    "cut inside its first record)");
-            if (pos + 2 > bytes.size() || pos + 2 + length > bytes.size())
+            const bool lengthFits = pos + 2 <= bytes.size();
+            const size_t length = lengthFits ? readLE16(bytes.data() + pos) : 0;
+            if (!lengthFits || pos + 2 + length > bytes.size())
             {
+                if (summary.records == 0)
+                    throw CsiDecodeError(
+                        path, pos, name(),
+                        "the first record does not fit in the file (not an Atheros CSI Tool log, "
+                        "or cut inside its first record)");
                 summary.noteOnce(
                     "the last record (byte " + std::to_string(pos) + ") is truncated: " +
-                    (pos + 2 > bytes.size() ? std::string("1 byte of its length")
-                                            : std::to_string(length) + " bytes announced, " +
-                                                  std::to_string(bytes.size() - pos - 2)) +
+                    (!lengthFits ? std::string("1 byte of its length")
+                                 : std::to_string(length) + " bytes announced, " +
+                                       std::to_string(bytes.size() - pos - 2)) +
                     " in the file (a capture that was stopped?); ignored");
                 break;
             }

@@ -355,7 +355,8 @@ public:
         ProgressThrottle progress(onProgress);
         size_t pos = 0, lineNo = 0;
         uint64_t stbcLines = 0, wideLines = 0, htLines = 0;
-        bool saidShorter = false;
+        std::string shorter;  // the note about rows shorter than their len, from the first
+        bool firstWordAssumed = false;
         while (pos < text.size())
         {
             size_t eol = text.find('\n', pos);
@@ -368,10 +369,8 @@ public:
                 Esp32Line l;
                 std::string why, reason;
                 auto obs = CObservationWiFiCSI::Create();
-                const bool parsed = parseLine(line, l, why, &reason);
-                if (parsed && !toObservation(l, *obs, why, options.esp32LegacyLtf))
-                    reason = "no valid channel or buffer";
-                if (!parsed && eol == text.size())
+                bool ok = parseLine(line, l, why, &reason);
+                if (!ok && eol == text.size())
                 {
                     // The last line, without its newline: a log cut off mid-line.
                     summary.noteOnce(
@@ -379,7 +378,9 @@ public:
                         ") is cut off (a capture that was stopped?); ignored: " + why);
                     break;
                 }
-                if (!parsed || !reason.empty())
+                if (ok && !(ok = toObservation(l, *obs, why, options.esp32LegacyLtf)))
+                    reason = "no valid channel or buffer";
+                if (!ok)
                 {
                     rejectRecord(
                         path, name(), options, summary, pos, reason, why,
@@ -388,19 +389,12 @@ public:
                     progress.update(pos, text.size());
                     continue;
                 }
-                if (l.shorterThanAnnounced && !saidShorter)
-                {
-                    saidShorter = true;
-                    summary.noteOnce(
-                        "rows whose len announces " + std::to_string(l.len) + " values hold " +
-                        std::to_string(l.values.size()) + " (first at line " +
-                        std::to_string(lineNo) +
-                        ", as ESP32-CSI-Tool logs HT frames): read as the L-LTF only");
-                }
-                if (l.firstWordAssumed)
-                    summary.noteOnce(
-                        "ESP32-CSI-Tool rows don't say whether the buffer's first 4 bytes are "
-                        "CSI; the ESP32 reports them invalid (first_word_invalid): masked");
+                if (l.shorterThanAnnounced && shorter.empty())
+                    shorter = "rows whose len announces " + std::to_string(l.len) +
+                              " values hold " + std::to_string(l.values.size()) +
+                              " (first at line " + std::to_string(lineNo) +
+                              ", as ESP32-CSI-Tool logs HT frames): read as the L-LTF only";
+                firstWordAssumed |= l.firstWordAssumed;
                 obs->sensorLabel = options.assembler.sensorLabel;
                 obs->sensorPose = options.assembler.sensorPose;
                 obs->routerAddress = "file";
@@ -419,6 +413,11 @@ public:
             progress.update(pos, text.size());
         }
         progress.update(1, 1);
+        if (!shorter.empty()) summary.notes.push_back(shorter);
+        if (firstWordAssumed)
+            summary.notes.push_back(
+                "ESP32-CSI-Tool rows don't say whether the buffer's first 4 bytes are CSI; the "
+                "ESP32 reports them invalid (first_word_invalid): masked");
         summary.details += "esp32: " + std::to_string(htLines) + " frames from the HT-LTF (" +
                            std::to_string(stbcLines) + " with STBC: 2 space-time streams), " +
                            std::to_string(summary.frames - htLines) + " from the L-LTF" +

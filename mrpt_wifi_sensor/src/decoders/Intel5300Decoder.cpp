@@ -38,6 +38,9 @@ double BfeeRecord::scaleFactor() const
     return f;
 }
 
+const char* const kWsrVariantReason =
+    "18 bytes between header and CSI: the WSR Toolbox's record variant (not read by this decoder)";
+
 bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why, std::string* reason)
 {
     const auto fail = [&](const char* category, std::string text)
@@ -77,11 +80,7 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why, st
         return fail("CSI payload size disagrees with the antenna counts", sizes);
     // The record length must be header + payload exactly: anything between would be read as
     // CSI (the WSR Toolbox's logger puts 18 bytes there).
-    if (held == calcLen + kWsrExtraBytes)
-        return fail(
-            "18 bytes between header and CSI: the WSR Toolbox's record variant (not read by this "
-            "decoder)",
-            sizes);
+    if (held == calcLen + kWsrExtraBytes) return fail(kWsrVariantReason, sizes);
     if (held != calcLen)
         return fail("record length disagrees with its header and CSI payload", sizes);
     const uint8_t* p = d + kBfeeHeaderBytes;
@@ -185,7 +184,7 @@ public:
                 // the WSR variant is recognised so that decoding can say what it is.
                 if (parseBfee(head + pos + 3, fieldLen - 1, r, why, &reason))
                     sawBfee = true;
-                else if (reason.rfind("18 bytes between", 0) == 0)
+                else if (reason == kWsrVariantReason)
                     sawWsr = true;
             }
             pos += 2 + fieldLen;

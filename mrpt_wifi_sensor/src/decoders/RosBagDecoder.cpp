@@ -38,9 +38,13 @@ public:
             path,
             [&](const ros1::BagMessage& m)
             {
-                const std::string where = "message " + std::to_string(index) + " (" + m.topic +
-                                          ", t=" + std::to_string(m.time) + ")";
                 const uint64_t at = index++;
+                // Only a rejected message needs its position in words.
+                const auto where = [&]
+                {
+                    return "message " + std::to_string(at) + " (" + m.topic +
+                           ", t=" + std::to_string(m.time) + ")";
+                };
                 if (m.datatype != wifi.datatype)
                 {
                     ++summary.skipped;
@@ -53,17 +57,17 @@ public:
                         path, name(), options, summary, at,
                         "rf_msgs/Wifi of another definition (MD5 " + m.md5 + ", expected " +
                             wifi.md5 + ")",
-                        {}, where);
+                        {}, where());
                 ros1::WifiMessage w;
                 std::string why;
                 if (!ros1::deserialize(m.bytes.data(), m.bytes.size(), w, why))
                     return rejectRecord(
-                        path, name(), options, summary, at, "malformed rf_msgs/Wifi", why, where);
+                        path, name(), options, summary, at, "malformed rf_msgs/Wifi", why, where());
                 auto obs = CObservationWiFiCSI::Create();
                 if (!ros1::toObservation(w, *obs, why))
                     return rejectRecord(
                         path, name(), options, summary, at, "rf_msgs/Wifi whose sizes disagree",
-                        why, where);
+                        why, where());
                 // WiROS stamps each message when it is received; a zero stamp: the bag's time.
                 if (w.header.stampSec == 0 && w.header.stampNsec == 0)
                     obs->timestamp = mrpt::Clock::fromDouble(m.time);

@@ -7,6 +7,7 @@
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
 #include <array>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -25,7 +26,7 @@ struct GraphSlamOptions
      *  on an office floor. With either > 0 both are estimated with these priors (the joint
      *  covariance then includes them: bearings alone cannot observe the scale); 0 and 0: the
      *  odometry has none. */
-    double odoScaleStd = 0.02, odoYawDriftStd_radPerM = 0.005236;
+    double odoScaleStd = 0.02, odoYawDriftStd_radPerM = 0.3 * M_PI / 180;
     /** > 0: the bearings of each transmitter count as one per cell of this size [m] that their
      *  receive positions visit (each σ × sqrt(bearings / cells)): bearings taken close together
      *  share their multipath error, so thousands of them are not thousands of independent

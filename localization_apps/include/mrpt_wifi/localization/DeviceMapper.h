@@ -7,6 +7,7 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mrpt_wifi::localization
@@ -55,6 +56,18 @@ struct DeviceMapOptions
      *  does not average out as the bearing noise does. */
     bool includePoseUncertainty = true;
 };
+
+/** χ² quantile for 2 degrees of freedom at 95 %: a point lies inside the 95 % ellipse of a 2-D
+ *  Gaussian when its Mahalanobis distance² is at most this. */
+constexpr double kChi2TwoDof95 = 5.991;
+
+/** Mahalanobis distance² of the offset (ex, ey) under the covariance xx, xy, yy [m²]; +∞ when
+ *  the covariance is not positive definite. */
+double mahalanobis2(double xx, double xy, double yy, double ex, double ey);
+
+/** The square cell of side `size` [m] that (x, y) falls in: bearings received in one cell share
+ *  their multipath error (DeviceMapOptions::decorrelation_m, GraphSlamOptions). */
+std::pair<long, long> decorrelationCell(double x, double y, double size);
 
 struct DeviceEstimate
 {

@@ -83,10 +83,10 @@ public:
     CsiFrameAssembler(const CsiFrameAssemblerOptions& options, FrameCallback onFrame);
 
     /** Feeds one UDP payload that arrived at `arrival` from `source` (e.g. the router's IP).
-     * Returns false if it was rejected (see stats()). */
+     * Returns false if it was rejected (counted in stats(); the reason also in `why`). */
     bool push(
         const uint8_t* data, size_t len, mrpt::Clock::time_point arrival,
-        const std::string& source = {});
+        const std::string& source = {}, nexmon::RejectReason* why = nullptr);
     /** Emits frames whose first datagram is older than the timeout at time `now`. */
     void flushExpired(mrpt::Clock::time_point now);
     /** Emits every pending frame (end of input). */

@@ -47,6 +47,8 @@ struct BfeeRecord
 /** Extra bytes the WSR Toolbox's CSI logger puts between the 20-byte header and the CSI of
  *  its 0xBB records (a timestamp and the peer's MAC among them). */
 constexpr size_t kWsrExtraBytes = 18;
+/** parseBfee's `reason` for a record of that variant. */
+extern const char* const kWsrVariantReason;
 
 /** Decodes the payload of a 0xBB record (the bytes after the code). Never throws: returns
  * false and sets `why` (and `reason`, a short category for counting) for impossible antenna

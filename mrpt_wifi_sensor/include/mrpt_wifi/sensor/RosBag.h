@@ -36,9 +36,9 @@ public:
     ~BagWriter();
     BagWriter(const BagWriter&) = delete;
     BagWriter& operator=(const BagWriter&) = delete;
+    /** `bytes`: the serialized message (taken over: the bag writer reads it in place). */
     void write(
-        const std::string& topic, double time, const MessageType& type,
-        const std::vector<uint8_t>& bytes);
+        const std::string& topic, double time, const MessageType& type, std::vector<uint8_t> bytes);
     void close();
 
 private:

@@ -86,7 +86,7 @@ bool toObservation(const WifiMessage& m, CObservationWiFiCSI& obs, std::string& 
 /** An observation as a Wifi message (header stamp = the observation's timestamp). */
 WifiMessage fromObservation(const CObservationWiFiCSI& obs, const std::string& rxId);
 /** A bearing as a Bearing message (aoa = [AoA in the receive array's frame, rad], rssi =
- *  [dBm]; n_tx / n_rx 0: a bearing does not carry the array sizes). Returns true. */
-bool fromBearing(const CObservationWiFiBearing& b, BearingMessage& out);
+ *  [dBm]; n_tx / n_rx 0: a bearing does not carry the array sizes). */
+BearingMessage fromBearing(const CObservationWiFiBearing& b);
 
 }  // namespace mrpt_wifi::ros1
