@@ -79,14 +79,8 @@ void readRawlog(
 }
 }  // namespace
 
-CsiFileKind detectCsiFileKind(const std::string& path)
+bool isCaptureMagic(const uint8_t* m)
 {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot open '" + path + "'");
-    std::array<uint8_t, 4> m{};
-    in.read(reinterpret_cast<char*>(m.data()), 4);
-    if (in.gcount() < 4)
-        throw std::runtime_error("'" + path + "' is empty or shorter than 4 bytes");
     const uint32_t magic =
         uint32_t(m[0]) | uint32_t(m[1]) << 8 | uint32_t(m[2]) << 16 | uint32_t(m[3]) << 24;
     switch (magic)
@@ -96,10 +90,21 @@ CsiFileKind detectCsiFileKind(const std::string& path)
         case 0xA1B23C4D:  // pcap, ns
         case 0x4D3CB2A1:
         case 0x0A0D0D0A:  // pcapng section header block
-            return CsiFileKind::Pcap;
+            return true;
         default:
-            return CsiFileKind::Rawlog;
+            return false;
     }
+}
+
+CsiFileKind detectCsiFileKind(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw std::runtime_error("cannot open '" + path + "'");
+    std::array<uint8_t, 4> m{};
+    in.read(reinterpret_cast<char*>(m.data()), 4);
+    if (in.gcount() < 4)
+        throw std::runtime_error("'" + path + "' is empty or shorter than 4 bytes");
+    return isCaptureMagic(m.data()) ? CsiFileKind::Pcap : CsiFileKind::Rawlog;
 }
 
 std::string CsiFileReadSummary::asString() const

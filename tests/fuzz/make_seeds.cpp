@@ -6,6 +6,9 @@
 //                                         that decoder (a declared length that disagrees
 //                                         with the bytes), so the fuzzer starts at each;
 //                                         FORMAT rosmessages: rf_msgs/Wifi and Bearing bytes
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sensor/RosMessages.h>
@@ -121,7 +124,16 @@ std::map<std::string, Bytes> esp32Cases(const Bytes& sample, const Bytes& csiToo
     return c;
 }
 
-/** Nexmon captures: a pcap whose last record is cut, one datagram of the wrong size. */
+Bytes serialized(const mrpt::serialization::CSerializable& object)
+{
+    mrpt::io::CMemoryStream stream;
+    mrpt::serialization::archiveFrom(stream) << object;
+    const auto* p = static_cast<const uint8_t*>(stream.getRawBufferData());
+    return Bytes(p, p + stream.getTotalBytesCount());
+}
+
+/** Nexmon captures: a pcap whose last record is cut, one datagram of the wrong size; stored
+ * frames (the rawlog path): valid, cut short, and an object of another MRPT class. */
 std::map<std::string, Bytes> nexmonCases(const fs::path& tmp)
 {
     std::map<std::string, Bytes> c;
@@ -139,6 +151,11 @@ std::map<std::string, Bytes> nexmonCases(const fs::path& tmp)
     full.resize(full.size() - 30);
     c["truncated-tail"] = full;
     fs::remove(tmp / "full.pcap");
+    Bytes stored = serialized(*frame);
+    c["stored-frame"] = stored;
+    stored.resize(stored.size() / 2);
+    c["stored-frame-cut"] = stored;
+    c["stored-foreign-class"] = serialized(mrpt::obs::CObservationOdometry());
     return c;
 }
 /** rf_msgs/Wifi and rf_msgs/Bearing bytes: valid ones, and each declared size disagreeing. */

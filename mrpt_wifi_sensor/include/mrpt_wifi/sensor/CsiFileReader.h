@@ -6,6 +6,7 @@
 #include <mrpt_wifi/sensor/PcapIO.h>
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -16,6 +17,9 @@ enum class CsiFileKind
     Pcap,   //!< pcap or pcapng capture of Nexmon datagrams
     Rawlog  //!< MRPT rawlog (gzip or plain) holding CObservationWiFiCSI
 };
+
+/** True if the 4 bytes are a pcap (either byte order, µs or ns) or pcapng magic number. */
+bool isCaptureMagic(const uint8_t* first4Bytes);
 
 /** Tells a capture from a rawlog by the first bytes; throws std::runtime_error naming the
  * file if it can't be read or is empty. */
