@@ -16,6 +16,26 @@ namespace mrpt_wifi::localization
 using mrpt::math::TPoint2D;
 using mrpt::math::TPose2D;
 
+namespace
+{
+/** Rows sorted by time into a trajectory; a repeated timestamp is an error naming the file. */
+Trajectory2D sortedTrajectory(
+    const std::string& path, std::vector<std::pair<double, TPose2D>>& rows)
+{
+    std::stable_sort(
+        rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    Trajectory2D out;
+    for (size_t i = 0; i < rows.size(); ++i)
+    {
+        if (i && rows[i].first == rows[i - 1].first)
+            throw std::runtime_error(
+                path + ": duplicate timestamp " + std::to_string(rows[i].first));
+        out.push_back(rows[i].first, rows[i].second);
+    }
+    return out;
+}
+}  // namespace
+
 Trajectory2D Trajectory2D::fromTumFile(const std::string& path)
 {
     std::ifstream f(path);
@@ -39,17 +59,61 @@ Trajectory2D Trajectory2D::fromTumFile(const std::string& path)
         const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
         rows.emplace_back(v[0], TPose2D(v[1], v[2], yaw));
     }
-    std::stable_sort(
-        rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    Trajectory2D out;
-    for (size_t i = 0; i < rows.size(); ++i)
+    return sortedTrajectory(path, rows);
+}
+
+Trajectory2D Trajectory2D::fromWsrCsv(const std::string& path)
+{
+    std::ifstream f(path);
+    if (!f) throw std::runtime_error(path + ": cannot open trajectory");
+    std::vector<std::pair<double, TPose2D>> rows;
+    std::string line;
+    int lineNo = 0;
+    while (std::getline(f, line))
     {
-        if (i && rows[i].first == rows[i - 1].first)
+        ++lineNo;
+        if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+        std::vector<double> v;
+        std::istringstream is(line);
+        std::string field;
+        while (std::getline(is, field, ','))
+        {
+            if (field.find_first_not_of(" \t\r") == std::string::npos) continue;
+            try
+            {
+                size_t used = 0;
+                v.push_back(std::stod(field, &used));
+                if (field.find_first_not_of(" \t\r", used) != std::string::npos)
+                    throw std::invalid_argument(field);
+            }
+            catch (const std::exception&)
+            {
+                throw std::runtime_error(
+                    path + ":" + std::to_string(lineNo) + ": '" + field + "' is not a number");
+            }
+        }
+        if (v.size() == 5)  // motion capture: t, (unused), x, y, z; no heading recorded
+            rows.emplace_back(v[0], TPose2D(v[2], v[3], 0.0));
+        else if (v.size() >= 9)  // ROS odometry: sec, nsec, x, y, z, qx, qy, qz, qw, twist...
+        {
+            const double qx = v[5], qy = v[6], qz = v[7], qw = v[8];
+            const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
+            rows.emplace_back(v[0] + 1e-9 * v[1], TPose2D(v[2], v[3], yaw));
+        }
+        else
             throw std::runtime_error(
-                path + ": duplicate timestamp " + std::to_string(rows[i].first));
-        out.push_back(rows[i].first, rows[i].second);
+                path + ":" + std::to_string(lineNo) + ": " + std::to_string(v.size()) +
+                " fields; expected 5 (t, -, x, y, z: motion capture) or at least 9 (sec, nsec, "
+                "x, y, z, qx, qy, qz, qw: odometry / tracking camera)");
     }
-    return out;
+    if (rows.empty()) throw std::runtime_error(path + ": no trajectory rows");
+    return sortedTrajectory(path, rows);
+}
+
+Trajectory2D Trajectory2D::fromFile(const std::string& path)
+{
+    const bool csv = path.size() >= 4 && path.compare(path.size() - 4, 4, ".csv") == 0;
+    return csv ? fromWsrCsv(path) : fromTumFile(path);
 }
 
 void Trajectory2D::saveTum(const std::string& path, const std::string& comment) const

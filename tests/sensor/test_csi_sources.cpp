@@ -704,14 +704,15 @@ TEST(CsiDecoders, BadIntelRecordIsSkippedAndCountedOrStopsWhenStrict)
     EXPECT_EQ(frames.size(), 1u);
 }
 
-TEST(CsiDecoders, IntelRecordLongerThanItsPayloadIsRefusedNotMisread)
+TEST(CsiDecoders, IntelRecordLongerThanItsPayloadIsReadAsWsrOrRefused)
 {
-    // The WSR Toolbox writes 18 more bytes between the header and the CSI; its records were
-    // decoded as ordinary ones (garbage CSI, no warning). Each declared length is now checked:
-    // the variant is recognised and named, any other surplus refused.
+    // The WSR Toolbox writes 18 more bytes between the header and the CSI; they were decoded
+    // as CSI (garbage, no warning). Now 18 bytes are read as its trailer (host time, sender
+    // MAC, frame counter) and the CSI after them; any other surplus is refused.
     test::TempDir tmp;
     const auto bytes = readWholeFile(data("intel5300/log.all_csi.6.7.6.dat"));
-    const size_t firstLen = size_t(bytes[0] << 8 | bytes[1]);
+    const auto plain = decodeAll(data("intel5300/log.all_csi.6.7.6.dat"));
+    ASSERT_GE(plain.size(), 4u);
     for (const size_t extra : {size_t(18), size_t(5)})
     {
         std::vector<uint8_t> rec;
@@ -725,34 +726,59 @@ TEST(CsiDecoders, IntelRecordLongerThanItsPayloadIsRefusedNotMisread)
             // code + 20-byte header, the extra block, then the CSI payload
             rec.insert(
                 rec.end(), bytes.begin() + long(pos + 2), bytes.begin() + long(pos + 2 + 21));
-            rec.insert(rec.end(), extra, uint8_t(0xAB));
+            std::vector<uint8_t> trailer(extra, uint8_t(0xAB));
+            if (extra == 18)
+            {
+                // 1 000 000 000 s + 250 000 µs, MAC 02:00:00:00:00:0n, counter 70 000 + n
+                trailer = {0x00, 0xCA, 0x9A, 0x3B, 0x90,       0xD0, 0x03, 0x00, 0x02,
+                           0x00, 0x00, 0x00, 0x00, uint8_t(n), 0,    0,    0,    0};
+                const uint32_t count = 70000 + uint32_t(n);
+                for (int i = 0; i < 4; ++i) trailer[size_t(14 + i)] = uint8_t(count >> (8 * i));
+            }
+            rec.insert(rec.end(), trailer.begin(), trailer.end());
             rec.insert(
                 rec.end(), bytes.begin() + long(pos + 2 + 21), bytes.begin() + long(pos + 2 + len));
             pos += 2 + len, ++n;
         }
         ASSERT_EQ(n, 4u);
-        ASSERT_GT(firstLen, 21u);
         const std::string path = writeBytes(tmp, "wsr" + std::to_string(extra) + ".dat", rec);
         std::vector<CObservationWiFiCSI::Ptr> frames;
         CsiDecodeSummary s;
-        // Detected as Intel 5300 (the WSR variant is recognised, so that it can be named).
         decodeCsiFile(
             path, extra == 18 ? "auto" : "intel5300", {}, [&](auto&& f) { frames.push_back(f); },
             {}, &s);
-        EXPECT_TRUE(frames.empty());
-        ASSERT_EQ(s.rejected.size(), 1u) << s.asString();
-        EXPECT_EQ(s.rejected[0].count, 4u);
-        EXPECT_NE(
-            s.rejected[0].reason.find(extra == 18 ? "WSR Toolbox" : "record length disagrees"),
-            std::string::npos)
-            << s.rejected[0].reason;
+        if (extra == 18)
+        {
+            EXPECT_EQ(s.format, "intel5300");
+            ASSERT_EQ(frames.size(), 4u) << s.asString();
+            for (size_t i = 0; i < 4; ++i)
+            {
+                EXPECT_EQ(frames[i]->csi, plain[i]->csi) << "record " << i;
+                EXPECT_EQ(frames[i]->source, "iwl5300-wsr");
+                EXPECT_EQ(
+                    frames[i]->transmitter.asString(), "02:00:00:00:00:0" + std::to_string(i));
+                EXPECT_EQ(frames[i]->firmwareCounter, uint16_t((70000 + i) & 0xFFFF));
+                EXPECT_NEAR(mrpt::Clock::toDouble(frames[i]->timestamp), 1e9 + 0.25, 1e-5);
+            }
+            EXPECT_TRUE(hasNote(s, "WSR Toolbox records")) << s.asString();
+        }
+        else
+        {
+            EXPECT_TRUE(frames.empty());
+            ASSERT_EQ(s.rejected.size(), 1u) << s.asString();
+            EXPECT_EQ(s.rejected[0].count, 4u);
+            EXPECT_NE(s.rejected[0].reason.find("record length disagrees"), std::string::npos)
+                << s.rejected[0].reason;
+        }
     }
 }
 
-TEST(CsiDecoders, RealWsrRecordingIsNamedNotMisread)
+TEST(CsiDecoders, RealWsrRecordingIsReadWithItsTrailer)
 {
-    // A real WSR Toolbox recording (../shared/data/wsr, LOS_Set_A): detected as Intel 5300,
-    // every record refused as the WSR variant (no garbage CSI), the cut last record a note.
+    // A real WSR Toolbox recording (../shared/data/wsr, LOS_Set_A), compared with an
+    // independent reading of its bytes (tests/data/wsr-reference/read_wsr_records.py): every
+    // record decoded, senders and counters as the trailer says, the CSI value for value, the
+    // cut last record a note.
     const std::string shared = test::sharedDir();
     const std::string path = shared +
                              "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
@@ -762,12 +788,43 @@ TEST(CsiDecoders, RealWsrRecordingIsNamedNotMisread)
     CsiDecodeSummary s;
     const auto frames = decodeAll(path, "auto", &s);
     EXPECT_EQ(s.format, "intel5300");
-    EXPECT_TRUE(frames.empty());
-    ASSERT_EQ(s.rejected.size(), 1u) << s.asString();
-    EXPECT_NE(s.rejected[0].reason.find("WSR Toolbox"), std::string::npos);
-    EXPECT_EQ(s.rejected[0].count, s.records);
-    EXPECT_GT(s.records, 4000u);
+    EXPECT_TRUE(s.rejected.empty()) << s.asString();
+    ASSERT_EQ(frames.size(), 4728u);
+    std::map<std::string, size_t> perSender;
+    for (const auto& f : frames) ++perSender[f->transmitter.asString()];
+    const std::map<std::string, size_t> expectedSenders = {
+        {"00:21:6a:30:d2:3c", 1577}, {"00:21:6a:3f:17:5a", 1576}, {"00:21:6a:b2:6e:fa", 1575}};
+    EXPECT_EQ(perSender, expectedSenders);
+    const auto expectRecord = [](const CObservationWiFiCSI& f, double time, const char* mac,
+                                 uint16_t count, const std::vector<std::pair<int, int>>& rx0)
+    {
+        EXPECT_NEAR(mrpt::Clock::toDouble(f.timestamp), time, 2e-6);
+        EXPECT_EQ(f.transmitter.asString(), mac);
+        EXPECT_EQ(f.firmwareCounter, count);
+        ASSERT_EQ(f.nRx, 3);
+        ASSERT_EQ(f.nTx, 1);
+        ASSERT_EQ(f.subcarrierIndices.size(), rx0.size());
+        for (size_t g = 0; g < rx0.size(); ++g)
+        {
+            const auto v = f.at(0, 0, subcarrierToBin(f.subcarrierIndices[g], f.nfft()));
+            EXPECT_EQ(v, CObservationWiFiCSI::Complex(float(rx0[g].first), float(rx0[g].second)))
+                << "subcarrier group " << g;
+        }
+    };
+    expectRecord(
+        *frames.front(), 1624840955.555331, "00:21:6a:30:d2:3c", 1,
+        {{0, -17},  {-20, -9}, {-17, 16}, {7, 23},    {26, 5},   {19, -22},  {-5, -29},  {-26, -13},
+         {-25, 14}, {-3, 30},  {21, 20},  {29, -5},   {15, -27}, {-11, -27}, {-21, -20}, {-28, 6},
+         {-12, 25}, {11, 24},  {26, 7},   {23, -16},  {4, -29},  {-20, -21}, {-32, 5},   {-17, 30},
+         {18, 30},  {38, 1},   {18, -35}, {-25, -29}, {-34, 13}, {-17, 26}});
+    expectRecord(
+        *frames.back(), 1624840968.478749, "00:21:6a:b2:6e:fa", 1577,
+        {{9, -26},   {-24, -24}, {-30, 7},  {-13, 29}, {16, 29}, {34, 8},  {28, -18}, {7, -34},
+         {-21, -33}, {-40, -6},  {-32, 22}, {-7, 38},  {24, 28}, {37, 3},  {36, -14}, {15, -33},
+         {-13, -32}, {-30, -14}, {-30, 10}, {-13, 26}, {10, 27}, {24, 11}, {24, -7},  {12, -20},
+         {-6, -25},  {-23, -12}, {-24, 11}, {-2, 28},  {21, 14}, {24, 0}});
     EXPECT_TRUE(hasNote(s, "is truncated")) << s.asString();
+    EXPECT_TRUE(hasNote(s, "WSR Toolbox records")) << s.asString();
 }
 
 TEST(CsiDecoders, FileOfAnotherFormatIsAClearError)

@@ -38,9 +38,6 @@ double BfeeRecord::scaleFactor() const
     return f;
 }
 
-const char* const kWsrVariantReason =
-    "18 bytes between header and CSI: the WSR Toolbox's record variant (not read by this decoder)";
-
 bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why, std::string* reason)
 {
     const auto fail = [&](const char* category, std::string text)
@@ -78,12 +75,24 @@ bool parseBfee(const uint8_t* d, size_t len, BfeeRecord& r, std::string& why, st
                               " Ntx=" + std::to_string(r.nTx) + " need " + std::to_string(calcLen);
     if (payloadLen != calcLen || held < calcLen)
         return fail("CSI payload size disagrees with the antenna counts", sizes);
-    // The record length must be header + payload exactly: anything between would be read as
-    // CSI (the WSR Toolbox's logger puts 18 bytes there).
-    if (held == calcLen + kWsrExtraBytes) return fail(kWsrVariantReason, sizes);
-    if (held != calcLen)
-        return fail("record length disagrees with its header and CSI payload", sizes);
+    // The record length must be header + payload exactly, or that plus the WSR Toolbox's
+    // trailer: anything else between would be read as CSI.
     const uint8_t* p = d + kBfeeHeaderBytes;
+    if (held == calcLen + kWsrExtraBytes)
+    {
+        const auto u32 = [](const uint8_t* b) {
+            return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 |
+                   uint32_t(b[3]) << 24;
+        };
+        WsrTrailer t;
+        t.hostTime_s = double(u32(p)) + 1e-6 * double(u32(p + 4));
+        std::copy(p + 8, p + 14, t.senderMac.begin());
+        t.frameCount = u32(p + 14);
+        r.wsr = t;
+        p += kWsrExtraBytes;
+    }
+    else if (held != calcLen)
+        return fail("record length disagrees with its header and CSI payload", sizes);
     // read_bfee.c reads one byte past the payload for the last value; treat it as 0.
     const auto byteAt = [&](unsigned i) -> unsigned { return i < calcLen ? p[i] : 0u; };
     std::array<std::complex<float>, kMaxAntennas * kMaxAntennas * kSubcarriers> raw{};
@@ -134,9 +143,14 @@ const std::array<int, kSubcarriers>& groupedSubcarriers(bool ht40)
 void toObservation(const BfeeRecord& r, const Chanspec& chanspec, CObservationWiFiCSI& obs)
 {
     obs.chanspec = chanspec;
-    obs.source = "iwl5300";
+    obs.source = r.wsr ? "iwl5300-wsr" : "iwl5300";
     obs.chipId = 0;
-    obs.firmwareCounter = r.bfeeCount;
+    obs.firmwareCounter = r.wsr ? uint16_t(r.wsr->frameCount & 0xFFFF) : r.bfeeCount;
+    if (r.wsr)
+    {
+        std::copy(r.wsr->senderMac.begin(), r.wsr->senderMac.end(), obs.transmitter.bytes.begin());
+        obs.timestamp = mrpt::Clock::fromDouble(r.wsr->hostTime_s);
+    }
     obs.rssi_dBm = int8_t(std::lround(std::clamp(r.totalRss_dBm(), -128.0, 127.0)));
     obs.antennaRssi_dB.assign(r.rssi.begin(), r.rssi.begin() + r.nRx);
     obs.noiseFloor_dBm = r.noise == -127 ? std::numeric_limits<float>::quiet_NaN() : r.noise;
@@ -169,7 +183,7 @@ public:
     {
         // Walk the records in the head: every length must fit and a 0xBB record must parse.
         size_t pos = 0;
-        bool sawBfee = false, sawWsr = false;
+        bool sawBfee = false;
         while (pos + 3 <= len)
         {
             const size_t fieldLen = size_t(head[pos] << 8 | head[pos + 1]);
@@ -179,17 +193,13 @@ public:
             if (code == kCodeBeamforming)
             {
                 BfeeRecord r;
-                std::string why, reason;
-                // One good record is enough (a bad one after it is the decoder's to report);
-                // the WSR variant is recognised so that decoding can say what it is.
-                if (parseBfee(head + pos + 3, fieldLen - 1, r, why, &reason))
-                    sawBfee = true;
-                else if (reason == kWsrVariantReason)
-                    sawWsr = true;
+                std::string why;
+                // One good record is enough (a bad one after it is the decoder's to report).
+                if (parseBfee(head + pos + 3, fieldLen - 1, r, why)) sawBfee = true;
             }
             pos += 2 + fieldLen;
         }
-        return sawBfee ? 90 : sawWsr ? 60 : 0;
+        return sawBfee ? 90 : 0;
     }
     void decodeFile(
         const std::string& path, const CsiDecodeOptions& options, const CsiFrameSink& onFrame,
@@ -250,9 +260,15 @@ public:
             obs->sensorLabel = options.assembler.sensorLabel;
             obs->sensorPose = options.assembler.sensorPose;
             obs->routerAddress = "file";
-            // The record's clock is the NIC's µs counter, not wall time.
+            // The record's clock is the NIC's µs counter, not wall time (a WSR record carries
+            // the host's time, set by toObservation).
             obs->timestamp = mrpt::Clock::fromDouble(r.timestampLow * 1e-6);
             toObservation(r, cs, *obs);
+            if (r.wsr)
+                summary.noteOnce(
+                    "WSR Toolbox records: timestamps from the logging computer's clock, the "
+                    "transmitter is the sender's MAC, firmwareCounter the low 16 bits of the "
+                    "sender's frame counter (pairs a packet with its reply)");
             ++summary.frames;
             onFrame(std::move(obs));
             pos += 2 + fieldLen;

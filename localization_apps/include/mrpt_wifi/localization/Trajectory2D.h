@@ -24,6 +24,12 @@ struct Trajectory2D
     /** Reads a TUM file (`t x y z qx qy qz qw`, '#' comments); yaw from the quaternion, z
      *  ignored. Throws std::runtime_error with file:line; sorts by time, rejects duplicates. */
     static Trajectory2D fromTumFile(const std::string& path);
+    /** Reads the WSR Toolbox dataset's CSV trajectories: motion capture rows `t, -, x, y, z`
+     *  (heading 0: not recorded) or odometry / tracking-camera rows `sec, nsec, x, y, z, qx,
+     *  qy, qz, qw, ...`. Throws std::runtime_error with file:line. */
+    static Trajectory2D fromWsrCsv(const std::string& path);
+    /** fromWsrCsv() for `.csv` files, fromTumFile() otherwise. */
+    static Trajectory2D fromFile(const std::string& path);
     /** Writes TUM (z = 0, rotation about z). */
     void saveTum(const std::string& path, const std::string& comment = {}) const;
 

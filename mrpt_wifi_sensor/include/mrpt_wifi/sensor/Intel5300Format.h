@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 /** The Linux 802.11n CSI Tool's `.dat` log of the Intel 5300 (log_to_file): records of a
@@ -19,6 +20,18 @@ constexpr unsigned kSubcarriers = 30;
 constexpr unsigned kMaxAntennas = 3;
 constexpr uint16_t kRateHt40 = 0x0800;  //!< RATE_MCS_HT40_MSK of rate_n_flags
 
+/** Extra bytes the WSR Toolbox's CSI logger (github Harvard-REACT) puts between the 20-byte
+ *  header and the CSI of its 0xBB records: the logging host's time (uint32 s, uint32 µs), the
+ *  sender's MAC address and the sender's frame counter (uint32), all little-endian. The
+ *  counter pairs a packet heard by one robot with the reply heard by the other. */
+constexpr size_t kWsrExtraBytes = 18;
+struct WsrTrailer
+{
+    double hostTime_s = 0;  //!< the logging computer's clock (gettimeofday) [s]
+    std::array<uint8_t, 6> senderMac{};
+    uint32_t frameCount = 0;  //!< the sender's packet counter
+};
+
 /** One decoded beamforming record (the fields of read_bfee + the permuted CSI). */
 struct BfeeRecord
 {
@@ -31,6 +44,7 @@ struct BfeeRecord
     std::array<uint8_t, 3> perm{};  //!< antenna permutation, 0-based
     bool permValid = false;         //!< perm is a permutation of 0..nRx−1 (else not applied)
     uint16_t rate = 0;              //!< rate_n_flags
+    std::optional<WsrTrailer> wsr;  //!< set for the WSR Toolbox's record variant
     /** CSI [tx][rx][subcarrier] as read_bf_file returns it (receive antennas permuted). */
     std::array<std::complex<float>, kMaxAntennas * kMaxAntennas * kSubcarriers> csi{};
     std::complex<float> at(unsigned tx, unsigned rx, unsigned s) const
@@ -44,16 +58,10 @@ struct BfeeRecord
     double scaleFactor() const;
 };
 
-/** Extra bytes the WSR Toolbox's CSI logger puts between the 20-byte header and the CSI of
- *  its 0xBB records (a timestamp and the peer's MAC among them). */
-constexpr size_t kWsrExtraBytes = 18;
-/** parseBfee's `reason` for a record of that variant. */
-extern const char* const kWsrVariantReason;
-
-/** Decodes the payload of a 0xBB record (the bytes after the code). Never throws: returns
- * false and sets `why` (and `reason`, a short category for counting) for impossible antenna
- * counts, a payload size not matching them, or a record longer than header + payload (the
- * WSR Toolbox's variant among them: `reason` then names it). */
+/** Decodes the payload of a 0xBB record (the bytes after the code): header + CSI, or header +
+ * WSR trailer + CSI (told apart by the record's length). Never throws: returns false and sets
+ * `why` (and `reason`, a short category for counting) for impossible antenna counts, a payload
+ * size not matching them, or a record length that is neither of the two. */
 bool parseBfee(
     const uint8_t* data, size_t len, BfeeRecord& out, std::string& why,
     std::string* reason = nullptr);
@@ -61,7 +69,9 @@ bool parseBfee(
 /** Subcarrier indices of the 30 groups: Ng = 2 at 20 MHz, Ng = 4 at 40 MHz (802.11n). */
 const std::array<int, kSubcarriers>& groupedSubcarriers(bool ht40);
 
-/** Fills an observation from a record on `chanspec` (bandwidth from the record's rate). */
+/** Fills an observation from a record on `chanspec` (bandwidth from the record's rate). A WSR
+ * record also gives the timestamp (host clock), the transmitter (the sender's MAC) and
+ * firmwareCounter (the low 16 bits of the sender's frame counter); `source` "iwl5300-wsr". */
 void toObservation(const BfeeRecord& r, const Chanspec& chanspec, CObservationWiFiCSI& obs);
 
 }  // namespace mrpt_wifi::intel5300

@@ -1,0 +1,252 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.
+ *
+ * wifi-sar: bearings from one antenna on a moving robot to peers it exchanges packets with (the
+ * WSR Toolbox's synthetic aperture): the CSI the moving robot recorded (--rx), what each peer
+ * recorded of the robot's packets (--tx), and the robot's trajectory. One bearing per peer. */
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/core/bits_math.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/localization/TransmitterMap.h>
+#include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
+#include <mrpt_wifi/sensor/CsiDecoder.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
+
+namespace
+{
+std::vector<CObservationWiFiCSI::Ptr> decodeFrames(
+    const std::string& path, const CsiDecodeOptions& options, bool quiet)
+{
+    std::vector<CObservationWiFiCSI::Ptr> frames;
+    CsiDecodeSummary summary;
+    cli::Progress progress("reading " + path, !quiet);
+    decodeCsiFile(
+        path, "auto", options, [&](CObservationWiFiCSI::Ptr&& f) { frames.push_back(f); },
+        [&](double x) { progress.update(x); }, &summary);
+    if (!quiet) progress.done(std::to_string(frames.size()) + " frames");
+    if (!summary.rejected.empty())
+        std::cerr << "wifi-sar: " << path << ": " << summary.asString() << "\n";
+    return frames;
+}
+
+std::vector<uint64_t> counters(const std::vector<CObservationWiFiCSI::Ptr>& frames)
+{
+    std::vector<uint16_t> c;
+    for (const auto& f : frames) c.push_back(f->firmwareCounter);
+    return sar::unwrapCounter16(c);
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    return cli::runMain(
+        "wifi-sar",
+        [&]
+        {
+            TCLAP::CmdLine cmd(
+                "Bearings from one antenna on a moving robot to the peers it exchanges packets "
+                "with (WSR Toolbox's synthetic aperture): forward x reverse channel of each "
+                "exchange, paired by the sender's frame counter, over the robot's trajectory.",
+                ' ', "0.1");
+            TCLAP::ValueArg<std::string> argRx(
+                "", "rx", "CSI the moving robot recorded of its peers (WSR .dat or rawlog)", true,
+                "", "CSI_RX.dat", cmd);
+            TCLAP::MultiArg<std::string> argTx(
+                "", "tx",
+                "CSI one peer recorded of the moving robot's packets; FILE@MAC names the peer's "
+                "MAC (else the sender in --rx whose channel matches, by reciprocity)",
+                true, "CSI_TX.dat[@MAC]", cmd);
+            TCLAP::ValueArg<std::string> argTraj(
+                "", "trajectory",
+                "The moving robot's trajectory on its CSI clock: TUM, or the WSR dataset's CSV "
+                "(motion capture, odometry or tracking camera)",
+                true, "", "FILE", cmd);
+            TCLAP::ValueArg<std::string> argAlign(
+                "", "align-to",
+                "Express the bearings in this trajectory's frame: --trajectory is rigidly "
+                "aligned to it over the exchanges (e.g. odometry or T265 onto motion capture)",
+                false, "", "FILE", cmd);
+            TCLAP::ValueArg<std::string> argTruth(
+                "", "truth",
+                "Peers' true positions (TransmitterMap YAML, by MAC): adds the true azimuth and "
+                "the error to the output",
+                false, "", "PEERS.yaml", cmd);
+            TCLAP::ValueArg<std::string> argChannel(
+                "", "channel", "Channel of the exchanges, CH or CH/BW (WSR dataset: 108)", false,
+                "108", "CH", cmd);
+            TCLAP::ValueArg<unsigned> argRxChain(
+                "", "rx-chain", "Receive chain of the moving robot's single antenna", false, 0, "N",
+                cmd);
+            TCLAP::ValueArg<unsigned> argPeerChain(
+                "", "peer-chain", "Receive chain of the peers' antenna", false, 0, "N", cmd);
+            TCLAP::ValueArg<double> argTimeOffset(
+                "", "time-offset", "Added to CSI times before looking up the trajectory [s]", false,
+                0.0, "S", cmd);
+            TCLAP::ValueArg<std::string> argCsv(
+                "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
+            TCLAP::SwitchArg argQuiet("q", "quiet", "No progress", cmd);
+            cmd.parse(argc, argv);
+            const bool quiet = argQuiet.getValue();
+
+            CsiDecodeOptions decode;
+            decode.chanspec = Chanspec::fromString(argChannel.getValue());
+            Trajectory2D traj = Trajectory2D::fromFile(argTraj.getValue());
+            std::optional<TransmitterMap> truth;
+            if (argTruth.isSet()) truth = TransmitterMap::fromYamlFile(argTruth.getValue());
+
+            const auto rxFrames = decodeFrames(argRx.getValue(), decode, quiet);
+            std::map<std::string, std::vector<CObservationWiFiCSI::Ptr>> bySender;
+            for (const auto& f : rxFrames) bySender[f->transmitter.asString()].push_back(f);
+            if (bySender.empty())
+                throw std::runtime_error("'" + argRx.getValue() + "' holds no CSI frames");
+
+            // Which sender each --tx file belongs to, and its exchanges.
+            struct Peer
+            {
+                std::string file, mac;
+                std::vector<sar::Exchange> exchanges;
+                size_t pairs = 0;
+            };
+            std::vector<Peer> peers;
+            for (const auto& spec : argTx.getValue())
+            {
+                Peer peer;
+                const auto at = spec.rfind('@');
+                peer.file = at == std::string::npos ? spec : spec.substr(0, at);
+                const auto txFrames = decodeFrames(peer.file, decode, quiet);
+                if (at != std::string::npos)
+                {
+                    peer.mac = MacAddress::fromString(spec.substr(at + 1)).asString();
+                    if (!bySender.count(peer.mac))
+                        throw std::runtime_error(
+                            "--tx " + spec + ": no frame from " + peer.mac + " in '" +
+                            argRx.getValue() + "'");
+                }
+                else
+                {
+                    double best = -2, second = -2;
+                    for (const auto& [mac, frames] : bySender)
+                    {
+                        const double score = sar::reciprocityScore(
+                            frames, txFrames, argRxChain.getValue(), argPeerChain.getValue());
+                        if (score > best)
+                            second = best, best = score, peer.mac = mac;
+                        else
+                            second = std::max(second, score);
+                    }
+                    std::cout << peer.file << ": sender " << peer.mac << " (amplitude correlation "
+                              << best << ", next " << second << ")\n";
+                    if (best < 0.5 || best - second < 0.2)
+                        throw std::runtime_error(
+                            "--tx " + peer.file +
+                            ": cannot tell which sender it recorded (reciprocity " +
+                            std::to_string(best) + " vs " + std::to_string(second) +
+                            "); name it as FILE@MAC");
+                }
+                const auto& mover = bySender[peer.mac];
+                for (const auto& [i, j] : sar::pairByCounter(counters(mover), counters(txFrames)))
+                {
+                    ++peer.pairs;
+                    const double t = mrpt::Clock::toDouble(mover[i]->timestamp);
+                    mrpt::math::TPose2D pose;
+                    if (!traj.interpolate(t + argTimeOffset.getValue(), pose, 0.5)) continue;
+                    const auto product = sar::combinedProduct(
+                        *mover[i], *txFrames[j], argRxChain.getValue(), argPeerChain.getValue());
+                    if (!product) continue;
+                    peer.exchanges.push_back({t, {pose.x, pose.y}, *product});
+                }
+                peers.push_back(std::move(peer));
+            }
+
+            // Frame of the output: the trajectory's own, or the reference it is aligned to.
+            mrpt::poses::CPose2D toOutput;
+            if (argAlign.isSet())
+            {
+                const auto ref = Trajectory2D::fromFile(argAlign.getValue());
+                std::vector<mrpt::math::TPoint2D> a, b;
+                for (const auto& peer : peers)
+                    for (const auto& e : peer.exchanges)
+                    {
+                        mrpt::math::TPose2D r;
+                        if (ref.interpolate(e.time_s + argTimeOffset.getValue(), r, 0.5))
+                            a.push_back(e.position), b.push_back({r.x, r.y});
+                    }
+                if (a.size() < 3)
+                    throw std::runtime_error(
+                        "--align-to: fewer than 3 exchanges inside both trajectories");
+                toOutput = mrpt::poses::CPose2D(alignRigid2D(a, b));
+                for (auto& peer : peers)
+                    for (auto& e : peer.exchanges)
+                    {
+                        const auto p = toOutput.composePoint(e.position);
+                        e.position = {p.x, p.y};
+                    }
+            }
+
+            std::ofstream csv;
+            if (argCsv.isSet())
+            {
+                csv.open(argCsv.getValue());
+                if (!csv) throw std::runtime_error("cannot write '" + argCsv.getValue() + "'");
+                csv << "mac,file,azimuth_deg,azimuth_std_deg,quality,packets_used,start_x,"
+                       "start_y,start_time,aperture_m,range_m,pairs,true_azimuth_deg,error_deg\n";
+            }
+            sar::SarOptions options;
+            options.carrier_Hz = decode.chanspec->centerFrequencyHz();
+            int failed = 0;
+            for (const auto& peer : peers)
+            {
+                std::string whyNot;
+                const auto est = sar::estimateBearing(peer.exchanges, options, whyNot);
+                if (!est)
+                {
+                    std::cout << peer.mac << " (" << peer.file << "): no bearing: " << whyNot
+                              << "\n";
+                    ++failed;
+                    continue;
+                }
+                double trueAz = std::nan(""), err = std::nan("");
+                if (truth)
+                    if (const auto* k = truth->find(MacAddress::fromString(peer.mac)))
+                    {
+                        trueAz = std::atan2(k->pose.y - est->start.y, k->pose.x - est->start.x);
+                        err = std::remainder(est->azimuth_rad - trueAz, 2 * M_PI);
+                    }
+                char line[512];
+                std::snprintf(
+                    line, sizeof(line),
+                    "%s azimuth %7.2f deg  sigma %5.2f  quality %.2f  packets %zu of %zu  "
+                    "aperture %.2f m  start (%.3f, %.3f)%s",
+                    peer.mac.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
+                    mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed, peer.pairs,
+                    est->apertureLength_m, est->start.x, est->start.y,
+                    std::isnan(err)
+                        ? ""
+                        : ("  error " + std::to_string(mrpt::RAD2DEG(err)) + " deg").c_str());
+                std::cout << line << "\n";
+                if (csv.is_open())
+                {
+                    std::snprintf(
+                        line, sizeof(line),
+                        "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f\n",
+                        peer.mac.c_str(), peer.file.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
+                        mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed,
+                        est->start.x, est->start.y, est->startTime_s, est->apertureLength_m,
+                        est->range_m, peer.pairs, mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err));
+                    csv << line;
+                }
+            }
+            std::cout << "wifi-sar: " << peers.size() - size_t(failed) << " of " << peers.size()
+                      << " peers with a bearing\n";
+            return failed ? 1 : 0;
+        });
+}

@@ -1,0 +1,88 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#pragma once
+
+#include <mrpt/math/TPoint2D.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+
+#include <complex>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+/** Bearings from one antenna on a moving robot (the WSR Toolbox's synthetic aperture, arXiv
+ * 2012.04174 / 2109.12205). A moving robot and a peer exchange packets; the product of the
+ * channel each heard from the other cancels both oscillators' offsets, leaving twice the
+ * propagation phase, 2·(2π/λ)·|peer − robot|. Over a trajectory with known displacement the
+ * products form an aperture, and the peer's direction is the one whose predicted phases best
+ * match them (Bartlett). */
+namespace mrpt_wifi::sar
+{
+/** One exchange: where the moving robot's antenna was and the combined channel product. */
+struct Exchange
+{
+    double time_s = 0;              //!< on the moving robot's clock
+    mrpt::math::TPoint2D position;  //!< moving antenna in the trajectory's frame [m]
+    std::complex<double> product;   //!< forward × reverse, subcarriers combined
+};
+
+/** Forward × reverse channel of one exchange between receive chain `moverRx` of the moving
+ * robot and `peerRx` of the peer (stream 0), combined over the reported subcarriers: each
+ * packet's delay slope (detection-time offset, not reciprocal) is measured from the rotation
+ * between neighbouring subcarriers and removed, then the subcarriers are summed coherently.
+ * Both frames must report the same subcarriers. std::nullopt (and `why`) otherwise. */
+std::optional<std::complex<double>> combinedProduct(
+    const CObservationWiFiCSI& heardByMover, const CObservationWiFiCSI& heardByPeer,
+    unsigned moverRx, unsigned peerRx, std::string* why = nullptr);
+
+/** Unwraps a 16-bit counter in arrival order (a reset backwards by more than half the range
+ *  counts as a wrap). */
+std::vector<uint64_t> unwrapCounter16(const std::vector<uint16_t>& counters);
+
+/** Index pairs (mover, peer) of frames with equal counters; a counter seen twice on one side
+ * is used once (its first frame). */
+std::vector<std::pair<size_t, size_t>> pairByCounter(
+    const std::vector<uint64_t>& moverCounters, const std::vector<uint64_t>& peerCounters);
+
+/** How well the peer's recording matches frames of one sender in the mover's recording: the
+ * mean correlation of the two channels' amplitude across subcarriers over paired exchanges
+ * (the channel is reciprocal, so the right sender correlates; about 0 for another one). */
+double reciprocityScore(
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByMover,
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByPeer, unsigned moverRx, unsigned peerRx);
+
+struct SarOptions
+{
+    double carrier_Hz = 5.54e9;          //!< centre frequency of the exchanges
+    double azimuthStep_deg = 0.5;        //!< far-field grid
+    double minApertureLength_m = 0.3;    //!< shorter paths give no estimate
+    double minMotionPerPacket_m = 1e-4;  //!< below: the robot stands still, packet unused
+    /** Candidate ranges of the near-field refinement around the far-field peak [m]. The
+     * far-field model assumes a straight wavefront; at a few metres a 1 m path sees the
+     * bearing turn by several degrees, which biases it. */
+    std::vector<double> ranges_m = {1.5, 2, 2.5, 3, 3.5, 4, 5, 6, 8, 12};
+    double refineHalfWidth_deg = 15;  //!< near-field search around the far-field peak
+    double stdFloor_deg = 2.0;        //!< σ never below this (geometry of the path, multipath)
+};
+
+struct SarEstimate
+{
+    double azimuth_rad = 0;       //!< direction to the peer from `start`, trajectory frame
+    double azimuthStd_rad = 0;    //!< 1σ
+    double quality = 0;           //!< 0..1: 1 − (highest side peak / main peak) of the profile
+    double range_m = 0;           //!< near-field range of the best fit (0: far field fitted best)
+    size_t packetsUsed = 0;       //!< exchanges taken while moving
+    double apertureLength_m = 0;  //!< path length over the used exchanges
+    mrpt::math::TPoint2D start;   //!< position at the first used exchange
+    double startTime_s = 0;
+    /** Far-field Bartlett profile, normalised to its peak, from −180° in azimuthStep_deg. */
+    std::vector<double> profile;
+};
+
+/** Bearing to the peer from exchanges sorted by time. std::nullopt with `whyNot` when the
+ * robot did not move enough or no exchange has a usable product. */
+std::optional<SarEstimate> estimateBearing(
+    const std::vector<Exchange>& exchanges, const SarOptions& options, std::string& whyNot);
+
+}  // namespace mrpt_wifi::sar

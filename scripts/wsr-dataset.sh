@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Runs wifi-sar on every sample of WSR Toolbox Dataset sets (github Harvard-REACT/
+# WSR-Toolbox-Dataset, 2D-Displacement_raw_data) and prints, per set and displacement source,
+# the azimuth errors against the true transmitter positions, as the issue's table compares
+# them with WSR's own outputs.
+#   scripts/wsr-dataset.sh BUILD_DIR DATASET_ROOT OUT_DIR SET [SET...]
+# DATASET_ROOT holds Dataset/ and config_files/ (e.g. ../shared/data/wsr). Displacement
+# sources: OptiTrack (rx_trajectory), T265 and wheel odometry (each rigidly aligned to
+# OptiTrack over the exchanges, so that the bearings are in the frame of the true positions).
+set -euo pipefail
+build=$(realpath "$1"); root=$(realpath "$2"); out=$3; shift 3
+mkdir -p "$out"; out=$(realpath "$out")
+for set in "$@"; do
+  for src in optitrack t265 odom; do
+    csv=$out/$set-$src.csv; rm -f "$csv"
+    for loc in "$root"/Dataset/2D-Displacement_raw_data/"$set"/*/; do
+      python3 "$(dirname "$0")/wsr_peers.py" "$loc/groundtruth_positions.json" \
+        "$root/config_files/dataset.json" > "$out/peers.yaml"
+      for rx in "$loc"/csi_rx_*.dat; do
+        stamp=$(basename "$rx" .dat); stamp=${stamp#csi_rx_}
+        case $src in
+          optitrack) traj=(--trajectory "$loc/rx_trajectory_${stamp}_.csv") ;;
+          *) traj=(--trajectory "$loc/${src}_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv") ;;
+        esac
+        txs=(); for t in "$loc"/csi_tx*_"$stamp".dat; do txs+=(--tx "$t"); done
+        "$build/bin/wifi-sar" -q --rx "$rx" "${txs[@]}" "${traj[@]}" --truth "$out/peers.yaml" \
+          --csv "$out/one.csv" > "$out/one.log" 2>&1 || { echo "$set $stamp $src: failed ($(tail -1 "$out/one.log"))"; continue; }
+        if [ -f "$csv" ]; then tail -n +2 "$out/one.csv" >> "$csv"; else cp "$out/one.csv" "$csv"; fi
+      done
+    done
+    [ -f "$csv" ] || continue
+    python3 - "$csv" "$set $src" <<'PY'
+import csv, statistics, sys
+rows = [r for r in csv.DictReader(open(sys.argv[1])) if r['error_deg'] != 'nan']
+err = [abs(float(r['error_deg'])) for r in rows]
+cov = sum(abs(float(r['error_deg'])) <= 3 * float(r['azimuth_std_deg']) for r in rows)
+print('%-22s bearings %3d  |error| mean %5.2f median %5.2f deg  > 30 deg %4.1f %%  within 3 sigma %5.1f %%'
+      % (sys.argv[2], len(err), statistics.mean(err), statistics.median(err),
+         100 * sum(e > 30 for e in err) / len(err), 100 * cov / len(err)))
+PY
+  done
+done

@@ -1,0 +1,206 @@
+/* Bearings from one antenna on a moving robot (issue 18): the estimator on synthetic exchanges
+ * with the defects of the WSR recordings (a robot that first stands still, lost packets,
+ * uneven rates, per-exchange phase noise), the pairing, and wifi-sar on a real recording. */
+#include <gtest/gtest.h>
+#include <mrpt/core/bits_math.h>
+#include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/localization/Trajectory2D.h>
+#include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "TestSupport.h"
+
+using namespace mrpt_wifi;
+
+namespace
+{
+constexpr double kCarrier_Hz = 5.54e9;
+
+/** Exchanges along a 1 m arc (as the WSR robot drives it) after 5 s standing still, the peer
+ *  at `range` along `azimuth` from the arc's start; 40 % of packets lost at random. */
+std::vector<sar::Exchange> arcExchanges(double azimuth, double range, unsigned seed)
+{
+    mrpt::random::CRandomGenerator rng(seed);
+    const double k = 2 * M_PI * kCarrier_Hz / 299792458.0;
+    const mrpt::math::TPoint2D peer(range * std::cos(azimuth), range * std::sin(azimuth));
+    std::vector<sar::Exchange> out;
+    for (double t = 0; t < 12.0; t += 1.0 / 120)
+    {
+        if (rng.drawUniform(0, 1) < 0.4) continue;
+        // Still for 5 s, then a quarter circle of radius 0.64 m (1 m of path) in 7 s.
+        const double s = std::clamp((t - 5.0) / 7.0, 0.0, 1.0) * M_PI / 2;
+        const mrpt::math::TPoint2D p(0.64 * std::sin(s), 0.64 * (1 - std::cos(s)));
+        // A channel turns by −2πf·delay: the product by −2k·distance.
+        const double phase = -2 * k * (peer - p).norm() + rng.drawGaussian1D(0, 0.5) + 1.234;
+        out.push_back({t, p, std::polar(rng.drawUniform(0.5, 1.5), phase)});
+    }
+    return out;
+}
+}  // namespace
+
+TEST(SyntheticAperture, FindsThePeerFromAnArcWithLostPacketsAndAStandstill)
+{
+    sar::SarOptions options;
+    options.carrier_Hz = kCarrier_Hz;
+    unsigned seed = 1;
+    for (const double azDeg : {-150.0, -60.0, 10.0, 95.0, 170.0})
+        for (const double range : {2.5, 6.0})
+        {
+            std::string why;
+            const auto est = sar::estimateBearing(
+                arcExchanges(mrpt::DEG2RAD(azDeg), range, seed++), options, why);
+            ASSERT_TRUE(est) << why;
+            const double err =
+                mrpt::RAD2DEG(std::remainder(est->azimuth_rad - mrpt::DEG2RAD(azDeg), 2 * M_PI));
+            EXPECT_LT(std::abs(err), 1.5) << "azimuth " << azDeg << " range " << range;
+            EXPECT_LE(std::abs(err), 3 * mrpt::RAD2DEG(est->azimuthStd_rad));
+            // The standstill contributes nothing: the start is where the robot began to move.
+            EXPECT_GT(est->startTime_s, 4.9);
+            EXPECT_LT(est->startTime_s, 5.2);
+            EXPECT_NEAR(est->apertureLength_m, 1.0, 0.05);
+            EXPECT_GE(est->quality, 0.0);
+            EXPECT_LE(est->quality, 1.0);
+        }
+}
+
+TEST(SyntheticAperture, TooShortAPathGivesNoBearingAndSaysWhy)
+{
+    auto ex = arcExchanges(0.3, 3.0, 7);
+    for (auto& e : ex) e.position = {e.position.x * 0.1, e.position.y * 0.1};  // 10 cm
+    std::string why;
+    EXPECT_FALSE(sar::estimateBearing(ex, {}, why));
+    EXPECT_NE(why.find("moved"), std::string::npos) << why;
+}
+
+TEST(SyntheticAperture, StraightPathIsFlaggedAsMirrorAmbiguous)
+{
+    // A straight path cannot tell a peer on its left from its mirror on its right: the
+    // profile has two equal peaks, and the quality says so.
+    auto ex = arcExchanges(mrpt::DEG2RAD(60), 4.0, 11);
+    const double k = 2 * M_PI * kCarrier_Hz / 299792458.0;
+    const mrpt::math::TPoint2D peer(
+        4.0 * std::cos(mrpt::DEG2RAD(60)), 4.0 * std::sin(mrpt::DEG2RAD(60)));
+    for (auto& e : ex)
+    {
+        e.position = {std::clamp((e.time_s - 5.0) / 7.0, 0.0, 1.0), 0.0};
+        e.product = std::polar(1.0, -2 * k * (peer - e.position).norm());
+    }
+    sar::SarOptions options;
+    options.carrier_Hz = kCarrier_Hz;
+    std::string why;
+    const auto est = sar::estimateBearing(ex, options, why);
+    ASSERT_TRUE(est) << why;
+    EXPECT_LT(est->quality, 0.1);
+    EXPECT_NEAR(std::abs(mrpt::RAD2DEG(est->azimuth_rad)), 60.0, 1.5);  // 60° or its mirror
+}
+
+TEST(SyntheticAperture, PairsByCounterAcrossA16BitWrap)
+{
+    const auto mover = sar::unwrapCounter16({65530, 65533, 65535, 2, 3, 9});
+    EXPECT_EQ(mover, (std::vector<uint64_t>{65530, 65533, 65535, 65538, 65539, 65545}));
+    const auto peer = sar::unwrapCounter16({65533, 65534, 1, 2, 3, 3});
+    const auto pairs = sar::pairByCounter(mover, peer);
+    const std::vector<std::pair<size_t, size_t>> expected = {{1, 0}, {3, 3}, {4, 4}};
+    EXPECT_EQ(pairs, expected);
+}
+
+TEST(WifiSar, RealRecordingGivesOneBearingPerPeer)
+{
+    // WSR Toolbox Dataset, LOS_Set_A (development set), location 1, first sample: the moving
+    // robot's recording, each peer's, and the motion-capture trajectory. Peer positions from
+    // the location's groundtruth_positions.json, MACs from config_files/dataset.json.
+    const std::string loc = test::sharedDir() +
+                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
+                            "0627_2D-multi-link_A_L1/";
+    if (test::sharedDir().empty() || !std::filesystem::exists(loc))
+        GTEST_SKIP() << "WSR recordings not found (../shared absent)";
+    test::TempDir tmp;
+    std::ofstream(tmp.file("peers.yaml"))
+        << "transmitters:\n"
+           "  - {name: tx2, mac: '00:21:6a:3f:17:5a', position: [-2.42, 2.65]}\n"
+           "  - {name: tx3, mac: '00:21:6a:30:d2:3c', position: [2.53, -2.65]}\n"
+           "  - {name: tx4, mac: '00:21:6a:b2:6e:fa', position: [-3.73, -1.49]}\n";
+    const std::string s = "2021-06-27_202550";
+    const std::string cmd = test::binDir() + "/wifi-sar -q --rx " + loc + "csi_rx_" + s +
+                            ".dat --tx " + loc + "csi_tx2_" + s + ".dat --tx " + loc + "csi_tx3_" +
+                            s + ".dat --tx " + loc + "csi_tx4_" + s + ".dat --trajectory " + loc +
+                            "rx_trajectory_" + s + "_.csv --truth " + tmp.file("peers.yaml") +
+                            " --csv " + tmp.file("out.csv") + " 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(p);
+    std::string out;
+    char buf[4096];
+    while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+    const int status = pclose(p);
+    ASSERT_TRUE(WIFEXITED(status));
+    ASSERT_EQ(WEXITSTATUS(status), 0) << out;
+    // Each peer's file is matched to its sender by reciprocity (the files don't say).
+    for (const char* pairing : {"csi_tx2_", "csi_tx3_", "csi_tx4_"})
+        EXPECT_NE(out.find(pairing), std::string::npos) << out;
+    EXPECT_NE(out.find("csi_tx2_" + s + ".dat: sender 00:21:6a:3f:17:5a"), std::string::npos)
+        << out;
+    EXPECT_NE(out.find("csi_tx3_" + s + ".dat: sender 00:21:6a:30:d2:3c"), std::string::npos)
+        << out;
+    EXPECT_NE(out.find("csi_tx4_" + s + ".dat: sender 00:21:6a:b2:6e:fa"), std::string::npos)
+        << out;
+    std::ifstream csv(tmp.file("out.csv"));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(
+        line.rfind(
+            "mac,file,azimuth_deg,azimuth_std_deg,quality,packets_used,start_x,start_y,start_time",
+            0),
+        0u);
+    int rows = 0;
+    while (std::getline(csv, line))
+    {
+        ++rows;
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+        ASSERT_EQ(f.size(), 14u) << line;
+        const double err = std::stod(f[13]), sigma = std::stod(f[3]);
+        // Development figures: 4.8°, 2.1°, 0.5° (WSR's own on this location: 3.5–7.7°).
+        EXPECT_LT(std::abs(err), 6.0) << line;
+        EXPECT_LE(std::abs(err), 3 * sigma) << line;
+        EXPECT_GT(std::stoi(f[5]), 800) << line;  // packets used while moving
+    }
+    EXPECT_EQ(rows, 3);
+}
+
+TEST(WifiSar, ReadsTheDatasetsTrajectoryFilesAndNamesABadLine)
+{
+    test::TempDir tmp;
+    // Motion capture: t, unused, x, y, z (trailing comma, as the dataset writes it).
+    std::ofstream(tmp.file("rx_trajectory_.csv")) << "10.0,0.000000,1.0,2.0,0.2,\n"
+                                                     "10.5,0.000000,1.5,2.0,0.2,\n";
+    // Odometry / T265: sec, nsec, x, y, z, qx, qy, qz, qw, twist (6).
+    std::ofstream(tmp.file("odom_rx_trajectory_.csv"))
+        << "10.000000,500000000.000000,1,2,0,0,0,0.7071068,0.7071068,0,0,0,0,0,0,\n"
+           "11.000000,0.000000,2,2,0,0,0,0,1,0,0,0,0,0,0,\n";
+    const auto mocap = localization::Trajectory2D::fromFile(tmp.file("rx_trajectory_.csv"));
+    ASSERT_EQ(mocap.size(), 2u);
+    mrpt::math::TPose2D p;
+    ASSERT_TRUE(mocap.interpolate(10.25, p));
+    EXPECT_NEAR(p.x, 1.25, 1e-9);
+    const auto odom = localization::Trajectory2D::fromFile(tmp.file("odom_rx_trajectory_.csv"));
+    ASSERT_EQ(odom.size(), 2u);
+    EXPECT_NEAR(odom.t[0], 10.5, 1e-9);
+    EXPECT_NEAR(odom.poses[0].phi, M_PI / 2, 1e-6);
+    std::ofstream(tmp.file("bad.csv")) << "10.0,0,1,2,0.2,\n10.5,0,1.5,x,0.2,\n";
+    try
+    {
+        localization::Trajectory2D::fromFile(tmp.file("bad.csv"));
+        ADD_FAILURE() << "no error";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("bad.csv:2: 'x' is not a number"), std::string::npos)
+            << e.what();
+    }
+}
