@@ -18,6 +18,12 @@ using mrpt::math::TPose2D;
 
 namespace
 {
+/** Yaw of a quaternion (rotation about z dominates for a planar robot). */
+double planarYaw(double qx, double qy, double qz, double qw)
+{
+    return std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
+}
+
 /** Rows sorted by time into a trajectory; a repeated timestamp is an error naming the file. */
 Trajectory2D sortedTrajectory(
     const std::string& path, std::vector<std::pair<double, TPose2D>>& rows)
@@ -54,10 +60,7 @@ Trajectory2D Trajectory2D::fromTumFile(const std::string& path)
             if (!(is >> x))
                 throw std::runtime_error(
                     path + ":" + std::to_string(lineNo) + ": expected 't x y z qx qy qz qw'");
-        // Yaw of a quaternion (rotation about z dominates for a planar robot).
-        const double qx = v[4], qy = v[5], qz = v[6], qw = v[7];
-        const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
-        rows.emplace_back(v[0], TPose2D(v[1], v[2], yaw));
+        rows.emplace_back(v[0], TPose2D(v[1], v[2], planarYaw(v[4], v[5], v[6], v[7])));
     }
     return sortedTrajectory(path, rows);
 }
@@ -95,11 +98,8 @@ Trajectory2D Trajectory2D::fromWsrCsv(const std::string& path)
         if (v.size() == 5)  // motion capture: t, (unused), x, y, z; no heading recorded
             rows.emplace_back(v[0], TPose2D(v[2], v[3], 0.0));
         else if (v.size() >= 9)  // ROS odometry: sec, nsec, x, y, z, qx, qy, qz, qw, twist...
-        {
-            const double qx = v[5], qy = v[6], qz = v[7], qw = v[8];
-            const double yaw = std::atan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz));
-            rows.emplace_back(v[0] + 1e-9 * v[1], TPose2D(v[2], v[3], yaw));
-        }
+            rows.emplace_back(
+                v[0] + 1e-9 * v[1], TPose2D(v[2], v[3], planarYaw(v[5], v[6], v[7], v[8])));
         else
             throw std::runtime_error(
                 path + ":" + std::to_string(lineNo) + ": " + std::to_string(v.size()) +
