@@ -89,7 +89,8 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<unsigned> argPeerChain(
                 "", "peer-chain", "Receive chain of the peers' antenna", false, 0, "N", cmd);
             TCLAP::ValueArg<double> argTimeOffset(
-                "", "time-offset", "Added to CSI times before looking up the trajectory [s]", false,
+                "", "time-offset",
+                "Added to CSI times before looking up the trajectory (pose latency) [s]", false,
                 0.0, "S", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
@@ -113,6 +114,7 @@ int main(int argc, char** argv)
             struct Peer
             {
                 std::string file, mac;
+                std::vector<std::pair<double, std::complex<double>>> products;  // time, product
                 std::vector<sar::Exchange> exchanges;
                 size_t pairs = 0;
             };
@@ -156,41 +158,59 @@ int main(int argc, char** argv)
                 for (const auto& [i, j] : sar::pairByCounter(counters(mover), counters(txFrames)))
                 {
                     ++peer.pairs;
-                    const double t = mrpt::Clock::toDouble(mover[i]->timestamp);
-                    mrpt::math::TPose2D pose;
-                    if (!traj.interpolate(t + argTimeOffset.getValue(), pose, 0.5)) continue;
                     const auto product = sar::combinedProduct(
                         *mover[i], *txFrames[j], argRxChain.getValue(), argPeerChain.getValue());
-                    if (!product) continue;
-                    peer.exchanges.push_back({t, {pose.x, pose.y}, *product});
+                    if (product)
+                        peer.products.emplace_back(
+                            mrpt::Clock::toDouble(mover[i]->timestamp), *product);
                 }
                 peers.push_back(std::move(peer));
             }
 
-            // Frame of the output: the trajectory's own, or the reference it is aligned to.
-            mrpt::poses::CPose2D toOutput;
+            // Frame of the output: the trajectory's own, or the reference it is rigidly aligned
+            // to over the span of the exchanges (both on their own clocks).
             if (argAlign.isSet())
             {
                 const auto ref = Trajectory2D::fromFile(argAlign.getValue());
-                std::vector<mrpt::math::TPoint2D> a, b;
+                double t0 = HUGE_VAL, t1 = -HUGE_VAL;
                 for (const auto& peer : peers)
-                    for (const auto& e : peer.exchanges)
-                    {
-                        mrpt::math::TPose2D r;
-                        if (ref.interpolate(e.time_s + argTimeOffset.getValue(), r, 0.5))
-                            a.push_back(e.position), b.push_back({r.x, r.y});
-                    }
+                    for (const auto& pr : peer.products)
+                        t0 = std::min(t0, pr.first), t1 = std::max(t1, pr.first);
+                std::vector<mrpt::math::TPoint2D> a, b;
+                for (size_t i = 0; i < traj.size(); ++i)
+                {
+                    mrpt::math::TPose2D r;
+                    if (traj.t[i] >= t0 && traj.t[i] <= t1 && ref.interpolate(traj.t[i], r, 0.5))
+                        a.push_back({traj.poses[i].x, traj.poses[i].y}), b.push_back({r.x, r.y});
+                }
                 if (a.size() < 3)
                     throw std::runtime_error(
-                        "--align-to: fewer than 3 exchanges inside both trajectories");
-                toOutput = mrpt::poses::CPose2D(alignRigid2D(a, b));
-                for (auto& peer : peers)
-                    for (auto& e : peer.exchanges)
-                    {
-                        const auto p = toOutput.composePoint(e.position);
-                        e.position = {p.x, p.y};
-                    }
+                        "--align-to: fewer than 3 poses of both trajectories during the exchanges");
+                const mrpt::poses::CPose2D toRef(alignRigid2D(a, b));
+                for (auto& pose : traj.poses) pose = (toRef + mrpt::poses::CPose2D(pose)).asTPose();
             }
+
+            sar::SarOptions options;
+            options.carrier_Hz = decode.chanspec->centerFrequencyHz();
+            // Exchanges with positions at a CSI-to-trajectory time offset.
+            const auto exchangesAt = [&](double offset)
+            {
+                for (auto& peer : peers)
+                {
+                    peer.exchanges.clear();
+                    for (const auto& [t, product] : peer.products)
+                    {
+                        mrpt::math::TPose2D pose;
+                        if (traj.interpolate(t + offset, pose, 0.5))
+                            peer.exchanges.push_back({t, {pose.x, pose.y}, product});
+                    }
+                }
+            };
+            // A search for the offset that maximises the peers' coherence was tried: on the
+            // development recordings coherence hardly changes with the offset (the bearing
+            // absorbs it), so the offset it picks made errors worse; the offset is an input.
+            const double offset = argTimeOffset.getValue();
+            exchangesAt(offset);
 
             std::ofstream csv;
             if (argCsv.isSet())
@@ -198,10 +218,9 @@ int main(int argc, char** argv)
                 csv.open(argCsv.getValue());
                 if (!csv) throw std::runtime_error("cannot write '" + argCsv.getValue() + "'");
                 csv << "mac,file,azimuth_deg,azimuth_std_deg,quality,packets_used,start_x,"
-                       "start_y,start_time,aperture_m,range_m,pairs,true_azimuth_deg,error_deg\n";
+                       "start_y,start_time,aperture_m,range_m,pairs,true_azimuth_deg,error_deg,"
+                       "coherence,time_offset\n";
             }
-            sar::SarOptions options;
-            options.carrier_Hz = decode.chanspec->centerFrequencyHz();
             int failed = 0;
             for (const auto& peer : peers)
             {
@@ -237,11 +256,12 @@ int main(int argc, char** argv)
                 {
                     std::snprintf(
                         line, sizeof(line),
-                        "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f\n",
+                        "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%.3f\n",
                         peer.mac.c_str(), peer.file.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
                         mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed,
                         est->start.x, est->start.y, est->startTime_s, est->apertureLength_m,
-                        est->range_m, peer.pairs, mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err));
+                        est->range_m, peer.pairs, mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err),
+                        est->coherence, offset);
                     csv << line;
                 }
             }

@@ -245,8 +245,17 @@ std::optional<SarEstimate> estimateBearing(
         }
     est.azimuth_rad = wrap(bestPhi);
     est.range_m = bestRange;
+    double sumAbs = 0;
+    for (const auto& u : used) sumAbs += u.w * std::abs(u.h);
+    est.coherence = sumAbs > 0 ? std::sqrt(best) / sumAbs : 0.0;
     const double floor = mrpt::DEG2RAD(options.stdFloor_deg);
     est.azimuthStd_rad = std::sqrt(floor * floor + 0.25 * halfWidth * halfWidth);
+    // Position errors along the path (a tracking camera's drift, a wrong latency) and
+    // multipath leave products the fitted peer does not explain; the main lobe's width does
+    // not show it, the coherence does.
+    if (est.coherence > 0 && est.coherence < options.coherenceReference)
+        est.azimuthStd_rad *=
+            std::pow(options.coherenceReference / est.coherence, options.coherenceExponent);
     return est;
 }
 
