@@ -52,5 +52,11 @@ function(mrpt_wifi_add_benchmark name)
     endif()
     add_executable(${name} ${ARG_SOURCES})
     target_link_libraries(${name} PRIVATE ${ARG_LINK} benchmark::benchmark)
+    # Benchmarks on real recordings find ../shared as the tests do.
+    target_compile_definitions(${name} PRIVATE
+        MRPT_WIFI_SHARED_DIR="${MRPT_WIFI_SHARED_DIR}"
+        MRPT_WIFI_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+        MRPT_WIFI_BIN_DIR="${CMAKE_RUNTIME_OUTPUT_DIRECTORY}"
+        MRPT_WIFI_LIB_DIR="${CMAKE_LIBRARY_OUTPUT_DIRECTORY}")
     mrpt_wifi_set_warnings(${name})
 endfunction()
