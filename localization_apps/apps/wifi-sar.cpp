@@ -80,6 +80,11 @@ int main(int argc, char** argv)
                 "Peers' true positions (TransmitterMap YAML, by MAC): adds the true azimuth and "
                 "the error to the output",
                 false, "", "PEERS.yaml", cmd);
+            TCLAP::ValueArg<std::string> argLocate(
+                "", "locate",
+                "Known peer positions (TransmitterMap YAML, by MAC): also locate the moving robot "
+                "at its start from its bearings (weighted least squares; WSR's localization)",
+                false, "", "PEERS.yaml", cmd);
             TCLAP::ValueArg<std::string> argChannel(
                 "", "channel", "Channel of the exchanges, CH or CH/BW (WSR dataset: 108)", false,
                 "108", "CH", cmd);
@@ -222,6 +227,11 @@ int main(int argc, char** argv)
                        "coherence,time_offset\n";
             }
             int failed = 0;
+            std::vector<std::pair<mrpt::math::TPoint2D, sar::SarEstimate>> located;  // peer, est
+            const auto knownPeers =
+                argLocate.isSet()
+                    ? std::optional(TransmitterMap::fromYamlFile(argLocate.getValue()))
+                    : std::nullopt;
             for (const auto& peer : peers)
             {
                 std::string whyNot;
@@ -233,6 +243,9 @@ int main(int argc, char** argv)
                     ++failed;
                     continue;
                 }
+                if (knownPeers)
+                    if (const auto* k = knownPeers->find(MacAddress::fromString(peer.mac)))
+                        located.emplace_back(mrpt::math::TPoint2D(k->pose.x, k->pose.y), *est);
                 double trueAz = std::nan(""), err = std::nan("");
                 if (truth)
                     if (const auto* k = truth->find(MacAddress::fromString(peer.mac)))
@@ -256,13 +269,30 @@ int main(int argc, char** argv)
                 {
                     std::snprintf(
                         line, sizeof(line),
-                        "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%.3f\n",
+                        "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%."
+                        "3f\n",
                         peer.mac.c_str(), peer.file.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
                         mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed,
                         est->start.x, est->start.y, est->startTime_s, est->apertureLength_m,
                         est->range_m, peer.pairs, mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err),
                         est->coherence, offset);
                     csv << line;
+                }
+            }
+            if (knownPeers)
+            {
+                if (located.size() < 2)
+                    std::cout << "not located: bearings to " << located.size()
+                              << " peer(s) of the map, 2 needed\n";
+                else
+                {
+                    const auto p = sar::locateFromBearings(located);
+                    // The bearings are taken from each peer's own start; they differ by the packets
+                    // dropped at the start, by millimetres.
+                    const auto& start = located.front().second.start;
+                    std::printf(
+                        "located: (%.3f, %.3f), %.3f m from the trajectory's start (%.3f, %.3f)\n",
+                        p.x, p.y, (p - start).norm(), start.x, start.y);
                 }
             }
             std::cout << "wifi-sar: " << peers.size() - size_t(failed) << " of " << peers.size()

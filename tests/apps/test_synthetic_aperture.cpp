@@ -99,6 +99,26 @@ TEST(SyntheticAperture, StraightPathIsFlaggedAsMirrorAmbiguous)
     EXPECT_NEAR(std::abs(mrpt::RAD2DEG(est->azimuth_rad)), 60.0, 1.5);  // 60° or its mirror
 }
 
+TEST(SyntheticAperture, LocatesTheStartFromBearingsToKnownPeers)
+{
+    // WSR's localization: bearings from the start to peers at known positions give the start.
+    const mrpt::math::TPoint2D start(0.7, -0.4);
+    const std::vector<mrpt::math::TPoint2D> peers = {{-2.42, 2.65}, {2.53, -2.65}, {-3.73, -1.49}};
+    const std::vector<double> noise_deg = {1.5, -2.0, 0.5};
+    std::vector<std::pair<mrpt::math::TPoint2D, sar::SarEstimate>> in;
+    for (size_t i = 0; i < peers.size(); ++i)
+    {
+        sar::SarEstimate e;
+        e.azimuth_rad =
+            std::atan2(peers[i].y - start.y, peers[i].x - start.x) + mrpt::DEG2RAD(noise_deg[i]);
+        e.azimuthStd_rad = mrpt::DEG2RAD(2.0);
+        in.emplace_back(peers[i], e);
+    }
+    EXPECT_LT((sar::locateFromBearings(in) - start).norm(), 0.2);
+    for (auto& [q, e] : in) e.azimuth_rad = std::atan2(q.y - start.y, q.x - start.x);
+    EXPECT_LT((sar::locateFromBearings(in) - start).norm(), 1e-4);  // exact bearings: exact
+}
+
 TEST(SyntheticAperture, PairsByCounterAcrossA16BitWrap)
 {
     const auto mover = sar::unwrapCounter16({65530, 65533, 65535, 2, 3, 9});

@@ -259,4 +259,52 @@ std::optional<SarEstimate> estimateBearing(
     return est;
 }
 
+mrpt::math::TPoint2D locateFromBearings(
+    const std::vector<std::pair<mrpt::math::TPoint2D, SarEstimate>>& peersAndBearings)
+{
+    // cost(p) = Σ (wrap(atan2(q − p) − φ) / σ)²; Gauss–Newton on (x, y).
+    const auto cost = [&](const mrpt::math::TPoint2D& p)
+    {
+        double c = 0;
+        for (const auto& [q, e] : peersAndBearings)
+        {
+            const double r = wrap(std::atan2(q.y - p.y, q.x - p.x) - e.azimuth_rad);
+            c += r * r / (e.azimuthStd_rad * e.azimuthStd_rad);
+        }
+        return c;
+    };
+    mrpt::math::TPoint2D best(0, 0);
+    double bestCost = HUGE_VAL;
+    for (const auto& [q0, e0] : peersAndBearings)
+        for (const double back : {0.5, 2.0, 5.0})
+        {
+            // Start on the ray back from this peer along its bearing.
+            mrpt::math::TPoint2D p(
+                q0.x - back * std::cos(e0.azimuth_rad), q0.y - back * std::sin(e0.azimuth_rad));
+            for (int it = 0; it < 50; ++it)
+            {
+                double h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
+                for (const auto& [q, e] : peersAndBearings)
+                {
+                    const double dx = q.x - p.x, dy = q.y - p.y, d2 = dx * dx + dy * dy;
+                    if (d2 < 1e-9) continue;
+                    const double r = wrap(std::atan2(dy, dx) - e.azimuth_rad);
+                    // d atan2(dy, dx) / d(px, py) = (dy, −dx) / d²
+                    const double jx = dy / d2, jy = -dx / d2;
+                    const double w = 1.0 / (e.azimuthStd_rad * e.azimuthStd_rad);
+                    h00 += w * jx * jx, h01 += w * jx * jy, h11 += w * jy * jy;
+                    g0 += w * jx * r, g1 += w * jy * r;
+                }
+                const double det = h00 * h11 - h01 * h01;
+                if (!(std::abs(det) > 1e-12)) break;
+                const double sx = -(h11 * g0 - h01 * g1) / det, sy = -(h00 * g1 - h01 * g0) / det;
+                p.x += sx, p.y += sy;
+                if (std::hypot(sx, sy) < 1e-6) break;
+            }
+            const double c = cost(p);
+            if (std::isfinite(c) && c < bestCost) bestCost = c, best = p;
+        }
+    return best;
+}
+
 }  // namespace mrpt_wifi::sar

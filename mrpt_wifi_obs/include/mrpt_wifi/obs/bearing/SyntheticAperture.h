@@ -63,7 +63,7 @@ struct SarOptions
      * bearing turn by several degrees, which biases it. */
     std::vector<double> ranges_m = {1.5, 2, 2.5, 3, 3.5, 4, 5, 6, 8, 12};
     double refineHalfWidth_deg = 15;  //!< near-field search around the far-field peak
-    double stdFloor_deg = 2.0;  //!< σ never below this (geometry of the path, multipath)
+    double stdFloor_deg = 2.0;        //!< σ never below this (geometry of the path, multipath)
     /** σ grows as (coherenceReference / coherence)^coherenceExponent below the reference.
      * Chosen on the WSR development sets (LOS_Set_A, NLOS_Set_C): errors grow as coherence
      * falls (median 2° above 0.5, 10° below 0.3 with a tracking camera's positions). */
@@ -73,9 +73,9 @@ struct SarOptions
 
 struct SarEstimate
 {
-    double azimuth_rad = 0;       //!< direction to the peer from `start`, trajectory frame
-    double azimuthStd_rad = 0;    //!< 1σ
-    double quality = 0;           //!< 0..1: 1 − (highest side peak / main peak) of the profile
+    double azimuth_rad = 0;     //!< direction to the peer from `start`, trajectory frame
+    double azimuthStd_rad = 0;  //!< 1σ
+    double quality = 0;         //!< 0..1: 1 − (highest side peak / main peak) of the profile
     /** |Σ w·h·conj(model)| / Σ w·|h| at the best fit, 0..1: how much of the products' energy
      *  the fitted peer explains (position errors along the path lower it). */
     double coherence = 0;
@@ -92,5 +92,11 @@ struct SarEstimate
  * robot did not move enough or no exchange has a usable product. */
 std::optional<SarEstimate> estimateBearing(
     const std::vector<Exchange>& exchanges, const SarOptions& options, std::string& whyNot);
+
+/** Where the moving robot started, from its bearings to peers at known positions (bearings in
+ * the same frame as the positions): weighted least squares on the angle residuals, started
+ * from every peer's surroundings so that a far start does not end in a local minimum. */
+mrpt::math::TPoint2D locateFromBearings(
+    const std::vector<std::pair<mrpt::math::TPoint2D, SarEstimate>>& peersAndBearings);
 
 }  // namespace mrpt_wifi::sar
