@@ -6,6 +6,7 @@
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/core/bits_math.h>
 #include <mrpt/poses/CPose2D.h>
+#include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 #include <mrpt_wifi/obs/CommandLine.h>
@@ -67,8 +68,8 @@ int main(int argc, char** argv)
                 true, "CSI_TX.dat[@MAC]", cmd);
             TCLAP::ValueArg<std::string> argTraj(
                 "", "trajectory",
-                "The moving robot's trajectory on its CSI clock: TUM, or the WSR dataset's CSV "
-                "(motion capture, odometry or tracking camera)",
+                "The moving robot's trajectory on its CSI clock: TUM, the WSR dataset's CSV "
+                "(motion capture, odometry or tracking camera), or a rawlog's odometry",
                 true, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argAlign(
                 "", "align-to",
@@ -97,6 +98,12 @@ int main(int argc, char** argv)
                 "", "time-offset",
                 "Added to CSI times before looking up the trajectory (pose latency) [s]", false,
                 0.0, "S", cmd);
+            TCLAP::ValueArg<std::string> argRawlogOut(
+                "", "rawlog",
+                "Write the bearings as CObservationWiFiBearing (AoA at the start, in the robot's "
+                "frame) with the trajectory as odometry, for wifi-pf-localization / "
+                "pf-localization",
+                false, "", "OUT.rawlog", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress", cmd);
@@ -105,7 +112,16 @@ int main(int argc, char** argv)
 
             CsiDecodeOptions decode;
             decode.chanspec = Chanspec::fromString(argChannel.getValue());
-            Trajectory2D traj = Trajectory2D::fromFile(argTraj.getValue());
+            const auto readTrajectory = [](const std::string& path)
+            {
+                const bool rawlog =
+                    path.size() >= 7 && path.compare(path.size() - 7, 7, ".rawlog") == 0;
+                if (!rawlog) return Trajectory2D::fromFile(path);
+                auto odo = readRawlog(path).odometry;
+                if (odo.empty()) throw std::runtime_error("'" + path + "' holds no odometry");
+                return odo;
+            };
+            Trajectory2D traj = readTrajectory(argTraj.getValue());
             std::optional<TransmitterMap> truth;
             if (argTruth.isSet()) truth = TransmitterMap::fromYamlFile(argTruth.getValue());
 
@@ -176,7 +192,7 @@ int main(int argc, char** argv)
             // to over the span of the exchanges (both on their own clocks).
             if (argAlign.isSet())
             {
-                const auto ref = Trajectory2D::fromFile(argAlign.getValue());
+                const auto ref = readTrajectory(argAlign.getValue());
                 double t0 = HUGE_VAL, t1 = -HUGE_VAL;
                 for (const auto& peer : peers)
                     for (const auto& pr : peer.products)
@@ -196,7 +212,8 @@ int main(int argc, char** argv)
             }
 
             sar::SarOptions options;
-            options.carrier_Hz = decode.chanspec->centerFrequencyHz();
+            // The channel the frames say (a rawlog's), else --channel's (.dat records have none).
+            options.carrier_Hz = rxFrames.front()->chanspec.centerFrequencyHz();
             // Exchanges with positions at a CSI-to-trajectory time offset.
             const auto exchangesAt = [&](double offset)
             {
@@ -228,6 +245,7 @@ int main(int argc, char** argv)
             }
             int failed = 0;
             std::vector<std::pair<mrpt::math::TPoint2D, sar::SarEstimate>> located;  // peer, est
+            std::vector<BearingRecord> records;
             const auto knownPeers =
                 argLocate.isSet()
                     ? std::optional(TransmitterMap::fromYamlFile(argLocate.getValue()))
@@ -242,6 +260,18 @@ int main(int argc, char** argv)
                               << "\n";
                     ++failed;
                     continue;
+                }
+                {
+                    // AoA in the robot's frame at the start (heading from the trajectory).
+                    mrpt::math::TPose2D at;
+                    traj.interpolate(est->startTime_s + offset, at, 0.5);
+                    BearingRecord r;
+                    r.t = est->startTime_s;  // CSI clock, as the odometry written below
+                    r.transmitter = MacAddress::fromString(peer.mac);
+                    r.hasAoa = true;
+                    r.aoa = std::remainder(est->azimuth_rad - at.phi, 2 * M_PI);
+                    r.aoaStd = est->azimuthStd_rad;
+                    records.push_back(r);
                 }
                 if (knownPeers)
                     if (const auto* k = knownPeers->find(MacAddress::fromString(peer.mac)))
@@ -294,6 +324,19 @@ int main(int argc, char** argv)
                         "located: (%.3f, %.3f), %.3f m from the trajectory's start (%.3f, %.3f)\n",
                         p.x, p.y, (p - start).norm(), start.x, start.y);
                 }
+            }
+            if (argRawlogOut.isSet())
+            {
+                std::sort(
+                    records.begin(), records.end(),
+                    [](const auto& a, const auto& b) { return a.t < b.t; });
+                // The trajectory, shifted to the CSI clock, is the odometry.
+                Trajectory2D odo;
+                for (size_t i = 0; i < traj.size(); ++i)
+                    odo.push_back(traj.t[i] - offset, traj.poses[i]);
+                const size_t n = writePfRawlog(argRawlogOut.getValue(), records, odo);
+                std::cout << "wrote " << n << " observations to " << argRawlogOut.getValue()
+                          << "\n";
             }
             std::cout << "wifi-sar: " << peers.size() - size_t(failed) << " of " << peers.size()
                       << " peers with a bearing\n";
