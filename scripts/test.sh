@@ -39,7 +39,7 @@ debug_lines=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DCMAKE_C_FLAGS
 # Two end-to-end calibration drives take 40-55 s each under ASan and exercise the same code as
 # TxChainCalibration.RecoversInjectedOffsetsFromTruePoses (which does run): step 1 runs them.
 asan_skip="TxChainCalibration[.](AodOnlyWhereCalibratedAndHonestSigma|ReceiverFromDriftingOdometryWithin3Degrees)"
-asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization"
+asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization test_sar"
 # The decoders' length-check seeds, replayed instrumented (FuzzSeeds.*).
 asan_targets="$asan_targets fuzz_make_seeds fuzz_replay_nexmon fuzz_replay_intel5300 fuzz_replay_esp32 fuzz_replay_atheros fuzz_replay_rosmessages"
 if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" -DMRPT_WIFI_SANITIZE=ON \

@@ -292,7 +292,10 @@ TEST(LocalizationAppsPf, FindsTheRobotAgainAfterAKidnappingMidRun)
         EXPECT_LT(after, 0.3) << withRecovery.out;
         // With odometry nothing else moves the particles that far (measured: 4.5 m); without,
         // the unknown-motion walk's wide tail also finds the robot again (0.07 m).
-        if (motion.rfind("--odometry-tum", 0) == 0) EXPECT_GT(afterNo, 1.0) << without.out;
+        if (motion.rfind("--odometry-tum", 0) == 0)
+        {
+            EXPECT_GT(afterNo, 1.0) << without.out;
+        }
         EXPECT_NE(withRecovery.out.find(" 0 estimates outside it"), std::string::npos)
             << withRecovery.out;
         const auto est = Trajectory2D::fromTumFile(out + "/estimate_tum.txt");
