@@ -6,6 +6,8 @@
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/core/bits_math.h>
 #include <mrpt/poses/CPose2D.h>
+#include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
@@ -104,6 +106,11 @@ int main(int argc, char** argv)
                 "frame) with the trajectory as odometry, for wifi-pf-localization / "
                 "pf-localization",
                 false, "", "OUT.rawlog", cmd);
+            TCLAP::ValueArg<std::string> argProfiles(
+                "", "profiles",
+                "Write per peer DIR/MAC-profile.png (the azimuth profile, estimate and truth) and "
+                "DIR/MAC-aperture.png (the path used and the bearing); needs gnuplot",
+                false, "", "DIR", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress", cmd);
@@ -283,6 +290,56 @@ int main(int argc, char** argv)
                         trueAz = std::atan2(k->pose.y - est->start.y, k->pose.x - est->start.x);
                         err = std::remainder(est->azimuth_rad - trueAz, 2 * M_PI);
                     }
+                if (argProfiles.isSet())
+                {
+                    namespace plot = localization::plot;
+                    const std::string base = argProfiles.getValue() + "/" + peer.mac;
+                    std::string name = base;
+                    for (auto& c : name)
+                        if (c == ':') c = '-';
+                    plot::Figure prof;
+                    prof.title = peer.mac + " (" + mrpt::system::extractFileName(peer.file) +
+                                 "): Bartlett profile of the synthetic aperture";
+                    prof.xlabel = "azimuth in the trajectory's frame [deg]";
+                    prof.ylabel = "power / peak";
+                    plot::Series ps{"far-field profile", {}, {}};
+                    const double step = 360.0 / double(est->profile.size());
+                    for (size_t a = 0; a < est->profile.size(); ++a)
+                        ps.x.push_back(-180.0 + double(a) * step), ps.y.push_back(est->profile[a]);
+                    prof.series.push_back(ps);
+                    const auto vline = [](double deg, const std::string& title, const char* style) {
+                        return plot::Series{title, {deg, deg}, {0.0, 1.05}, style};
+                    };
+                    prof.series.push_back(vline(
+                        mrpt::RAD2DEG(est->azimuth_rad), "estimate", "lines lw 2 lc rgb 'red'"));
+                    if (!std::isnan(trueAz))
+                        prof.series.push_back(vline(
+                            mrpt::RAD2DEG(trueAz), "truth", "lines lw 2 dt 2 lc rgb 'black'"));
+                    plot::Figure ap;
+                    ap.title = peer.mac + ": path of the used exchanges and the bearing";
+                    ap.xlabel = "x [m]", ap.ylabel = "y [m]", ap.equalAxes = true;
+                    plot::Series path{"path", {}, {}};
+                    for (const auto& e : peer.exchanges)
+                        path.x.push_back(e.position.x), path.y.push_back(e.position.y);
+                    ap.series.push_back(path);
+                    const double len = 2.0;
+                    ap.series.push_back(
+                        {"bearing",
+                         {est->start.x, est->start.x + len * std::cos(est->azimuth_rad)},
+                         {est->start.y, est->start.y + len * std::sin(est->azimuth_rad)},
+                         "lines lw 2 lc rgb 'red'"});
+                    if (!std::isnan(trueAz))
+                        ap.series.push_back(
+                            {"truth",
+                             {est->start.x, est->start.x + len * std::cos(trueAz)},
+                             {est->start.y, est->start.y + len * std::sin(trueAz)},
+                             "lines lw 2 dt 2 lc rgb 'black'"});
+                    mrpt::system::createDirectory(argProfiles.getValue());
+                    std::string why;
+                    if (!plot::savePng(prof, name + "-profile.png", &why) ||
+                        !plot::savePng(ap, name + "-aperture.png", &why))
+                        std::cerr << "wifi-sar: no profile pictures: " << why << "\n";
+                }
                 char line[512];
                 std::snprintf(
                     line, sizeof(line),
