@@ -41,12 +41,6 @@ std::vector<CObservationWiFiCSI::Ptr> decodeFrames(
     return frames;
 }
 
-std::vector<uint64_t> counters(const std::vector<CObservationWiFiCSI::Ptr>& frames)
-{
-    std::vector<uint16_t> c;
-    for (const auto& f : frames) c.push_back(f->firmwareCounter);
-    return sar::unwrapCounter16(c);
-}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -182,16 +176,10 @@ int main(int argc, char** argv)
                             std::to_string(best) + " vs " + std::to_string(second) +
                             "); name it as FILE@MAC");
                 }
-                const auto& mover = bySender[peer.mac];
-                for (const auto& [i, j] : sar::pairByCounter(counters(mover), counters(txFrames)))
-                {
-                    ++peer.pairs;
-                    const auto product = sar::combinedProduct(
-                        *mover[i], *txFrames[j], argRxChain.getValue(), argPeerChain.getValue());
-                    if (product)
-                        peer.products.emplace_back(
-                            mrpt::Clock::toDouble(mover[i]->timestamp), *product);
-                }
+                for (const auto& pp : sar::pairedProducts(
+                         bySender[peer.mac], txFrames, argRxChain.getValue(),
+                         argPeerChain.getValue(), &peer.pairs))
+                    peer.products.emplace_back(pp.time_s, pp.product);
                 peers.push_back(std::move(peer));
             }
 

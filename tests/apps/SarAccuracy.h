@@ -33,13 +33,6 @@ struct RoomResult
     std::vector<PeerResult> peers;
 };
 
-inline std::vector<uint64_t> frameCounters(const std::vector<CObservationWiFiCSI::Ptr>& frames)
-{
-    std::vector<uint16_t> c;
-    for (const auto& f : frames) c.push_back(f->firmwareCounter);
-    return sar::unwrapCounter16(c);
-}
-
 /** One room: `positionErrorRms_m` > 0 adds a smooth error to the positions the estimator sees. */
 inline RoomResult runRoom(
     uint32_t seed, const std::string& arraysDir, double positionErrorRms_m = 0)
@@ -95,15 +88,9 @@ inline RoomResult runRoom(
         std::vector<CObservationWiFiCSI::Ptr> mover;
         for (const auto& f : rec.heardByMover)
             if (f->transmitter == peers[m].mac) mover.push_back(f);
-        const auto& peerFrames = rec.heardByPeer[m];
         std::vector<sar::Exchange> ex;
-        for (const auto& [i, j] :
-             sar::pairByCounter(frameCounters(mover), frameCounters(peerFrames)))
-        {
-            const double t = mrpt::Clock::toDouble(mover[i]->timestamp);
-            if (const auto h = sar::combinedProduct(*mover[i], *peerFrames[j], 0, 0))
-                ex.push_back({t, seenAt(t), *h});
-        }
+        for (const auto& pp : sar::pairedProducts(mover, rec.heardByPeer[m], 0, 0))
+            ex.push_back({pp.time_s, seenAt(pp.time_s), pp.product});
         std::string why;
         PeerResult r;
         if (const auto est = sar::estimateBearing(ex, so, why))

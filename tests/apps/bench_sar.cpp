@@ -38,12 +38,6 @@ std::vector<CObservationWiFiCSI::Ptr> decode(const std::string& path)
     return frames;
 }
 
-std::vector<uint64_t> counters(const std::vector<CObservationWiFiCSI::Ptr>& frames)
-{
-    std::vector<uint16_t> c;
-    for (const auto& f : frames) c.push_back(f->firmwareCounter);
-    return sar::unwrapCounter16(c);
-}
 }  // namespace
 
 static void BM_SarBearingFromRecording(benchmark::State& state)
@@ -68,13 +62,11 @@ static void BM_SarBearingFromRecording(benchmark::State& state)
     for (auto _ : state)
     {
         std::vector<sar::Exchange> ex;
-        for (const auto& [i, j] : sar::pairByCounter(counters(mover), counters(peer)))
+        for (const auto& pp : sar::pairedProducts(mover, peer, 0, 0))
         {
-            const double t = mrpt::Clock::toDouble(mover[i]->timestamp);
             mrpt::math::TPose2D p;
-            if (!traj.interpolate(t, p, 0.5)) continue;
-            if (const auto h = sar::combinedProduct(*mover[i], *peer[j], 0, 0))
-                ex.push_back({t, {p.x, p.y}, *h});
+            if (traj.interpolate(pp.time_s, p, 0.5))
+                ex.push_back({pp.time_s, {p.x, p.y}, pp.product});
         }
         std::string why;
         const auto est = sar::estimateBearing(ex, options, why);

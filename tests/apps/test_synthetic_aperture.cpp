@@ -245,7 +245,7 @@ TEST(PacketExchange, ProductCancelsWhatEachReceptionScrambles)
     };
     std::vector<std::complex<double>> single, products;
     for (const auto& [i, j] : sar::pairByCounter(
-             sartest::frameCounters(rec.heardByMover), sartest::frameCounters(rec.heardByPeer[0])))
+             sar::frameCounters(rec.heardByMover), sar::frameCounters(rec.heardByPeer[0])))
     {
         single.push_back(std::complex<double>(rec.heardByMover[i]->at(0, 0, 32 + 1)));
         products.push_back(

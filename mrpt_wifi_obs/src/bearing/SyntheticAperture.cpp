@@ -101,18 +101,39 @@ std::vector<std::pair<size_t, size_t>> pairByCounter(
     return pairs;
 }
 
+std::vector<uint64_t> frameCounters(const std::vector<CObservationWiFiCSI::Ptr>& frames)
+{
+    std::vector<uint16_t> c;
+    c.reserve(frames.size());
+    for (const auto& f : frames) c.push_back(f->firmwareCounter);
+    return unwrapCounter16(c);
+}
+
+std::vector<PairedProduct> pairedProducts(
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByMover,
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByPeer, unsigned moverRx, unsigned peerRx,
+    size_t* pairs)
+{
+    const auto matched = pairByCounter(frameCounters(heardByMover), frameCounters(heardByPeer));
+    if (pairs) *pairs = matched.size();
+    std::vector<PairedProduct> out;
+    out.reserve(matched.size());
+    for (const auto& [i, j] : matched)
+        if (const auto h = combinedProduct(*heardByMover[i], *heardByPeer[j], moverRx, peerRx))
+            out.push_back({mrpt::Clock::toDouble(heardByMover[i]->timestamp), *h});
+    return out;
+}
+
 double reciprocityScore(
     const std::vector<CObservationWiFiCSI::Ptr>& heardByMover,
     const std::vector<CObservationWiFiCSI::Ptr>& heardByPeer, unsigned moverRx, unsigned peerRx)
 {
-    std::vector<uint16_t> cm, cp;
-    for (const auto& f : heardByMover) cm.push_back(f->firmwareCounter);
-    for (const auto& f : heardByPeer) cp.push_back(f->firmwareCounter);
     double sum = 0;
     size_t n = 0;
     std::vector<int> ka, kb;
     std::vector<std::complex<double>> a, b;
-    for (const auto& [i, j] : pairByCounter(unwrapCounter16(cm), unwrapCounter16(cp)))
+    for (const auto& [i, j] :
+         pairByCounter(frameCounters(heardByMover), frameCounters(heardByPeer)))
     {
         if (!chainValues(*heardByMover[i], moverRx, ka, a) ||
             !chainValues(*heardByPeer[j], peerRx, kb, b) || ka != kb)

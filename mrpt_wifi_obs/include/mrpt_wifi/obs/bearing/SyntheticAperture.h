@@ -45,6 +45,24 @@ std::vector<uint64_t> unwrapCounter16(const std::vector<uint16_t>& counters);
 std::vector<std::pair<size_t, size_t>> pairByCounter(
     const std::vector<uint64_t>& moverCounters, const std::vector<uint64_t>& peerCounters);
 
+/** The senders' frame counters of frames in arrival order, unwrapped (firmwareCounter). */
+std::vector<uint64_t> frameCounters(const std::vector<CObservationWiFiCSI::Ptr>& frames);
+
+/** One exchange before positions are known: when the moving robot heard it, and the product. */
+struct PairedProduct
+{
+    double time_s = 0;  //!< the moving robot's timestamp of the peer's packet
+    std::complex<double> product;
+};
+
+/** The moving robot's frames from one peer paired with the peer's frames of the robot by
+ * counter, each pair's combinedProduct() (pairs without one skipped). `pairs` (optional): how
+ * many pairs matched. */
+std::vector<PairedProduct> pairedProducts(
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByMover,
+    const std::vector<CObservationWiFiCSI::Ptr>& heardByPeer, unsigned moverRx, unsigned peerRx,
+    size_t* pairs = nullptr);
+
 /** How well the peer's recording matches frames of one sender in the mover's recording: the
  * mean correlation of the two channels' amplitude across subcarriers over paired exchanges
  * (the channel is reciprocal, so the right sender correlates; about 0 for another one). */
