@@ -251,6 +251,13 @@ int main(int argc, char** argv)
                 const auto est = sar::estimateBearing(peer.exchanges, options, whyNot);
                 if (!est)
                 {
+                    if (peer.exchanges.size() < peer.products.size() / 2 && !traj.empty())
+                        whyNot += "; only " + std::to_string(peer.exchanges.size()) + " of " +
+                                  std::to_string(peer.products.size()) +
+                                  " exchanges fall inside the trajectory's time span (" +
+                                  std::to_string(traj.t.front()) + " to " +
+                                  std::to_string(traj.t.back()) +
+                                  "): check its clock or --time-offset";
                     std::cout << peer.mac << " (" << peer.file << "): no bearing: " << whyNot
                               << "\n";
                     ++failed;

@@ -279,3 +279,38 @@ TEST(SyntheticAperture, SimulatedRoomsDevelopmentSeeds)
     EXPECT_LT(errors[errors.size() / 2], 2.0);
     EXPECT_GE(double(covered), 0.9 * double(errors.size()));
 }
+
+TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
+{
+    const std::string loc = test::sharedDir() +
+                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
+                            "0627_2D-multi-link_A_L1/";
+    if (test::sharedDir().empty() || !std::filesystem::exists(loc))
+        GTEST_SKIP() << "WSR recordings not found (../shared absent)";
+    const std::string s = "2021-06-27_202550";
+    // The right files, the trajectory shifted by an hour: no exchange inside it.
+    const std::string cmd = test::binDir() + "/wifi-sar -q --rx " + loc + "csi_rx_" + s +
+                            ".dat --tx " + loc + "csi_tx2_" + s + ".dat --trajectory " + loc +
+                            "rx_trajectory_" + s + "_.csv --time-offset 3600 2>&1";
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_TRUE(p);
+    std::string out;
+    char buf[4096];
+    while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+    const int status = pclose(p);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1) << out;
+    EXPECT_NE(out.find("no bearing"), std::string::npos) << out;
+    EXPECT_NE(out.find("fall inside the trajectory's time span"), std::string::npos) << out;
+    // A missing file: the error names it, exit 1.
+    const auto missing = popen(
+        (test::binDir() + "/wifi-sar -q --rx /nonexistent.dat --tx x.dat --trajectory y.csv 2>&1")
+            .c_str(),
+        "r");
+    ASSERT_TRUE(missing);
+    out.clear();
+    while (size_t n = fread(buf, 1, sizeof(buf), missing)) out.append(buf, n);
+    const int st2 = pclose(missing);
+    EXPECT_EQ(WEXITSTATUS(st2), 1) << out;
+    EXPECT_NE(out.find("y.csv"), std::string::npos) << out;
+}
