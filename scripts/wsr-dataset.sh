@@ -7,7 +7,8 @@
 #   scripts/wsr-dataset.sh BUILD_DIR DATASET_ROOT OUT_DIR SET [SET...]
 # DATASET_ROOT holds Dataset/ and config_files/ (e.g. ../shared/data/wsr). Displacement
 # sources: OptiTrack (rx_trajectory), T265 and wheel odometry (each rigidly aligned to
-# OptiTrack over the exchanges, so that the bearings are in the frame of the true positions).
+# OptiTrack over the exchanges, so that the bearings are in the frame of the true positions),
+# with their position errors given as --position-std (T265 0.02 m, wheel odometry 0.05 m).
 set -euo pipefail
 build=$(realpath "$1"); root=$(realpath "$2"); out=$3; shift 3
 mkdir -p "$out"; out=$(realpath "$out")
@@ -21,7 +22,8 @@ for set in "$@"; do
         stamp=$(basename "$rx" .dat); stamp=${stamp#csi_rx_}
         case $src in
           optitrack) traj=(--trajectory "$loc/rx_trajectory_${stamp}_.csv") ;;
-          *) traj=(--trajectory "$loc/${src}_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv") ;;
+          t265) traj=(--trajectory "$loc/t265_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv" --position-std 0.02) ;;
+          odom) traj=(--trajectory "$loc/odom_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv" --position-std 0.05) ;;
         esac
         txs=(); for t in "$loc"/csi_tx*_"$stamp".dat; do txs+=(--tx "$t"); done
         "$build/bin/wifi-sar" -q --rx "$rx" "${txs[@]}" "${traj[@]}" --truth "$out/peers.yaml" --locate "$out/peers.yaml" \

@@ -82,6 +82,11 @@ int main(int argc, char** argv)
                 "Known peer positions (TransmitterMap YAML, by MAC): also locate the moving robot "
                 "at its start from its bearings (weighted least squares; WSR's localization)",
                 false, "", "PEERS.yaml", cmd);
+            TCLAP::ValueArg<double> argPositionStd(
+                "", "position-std",
+                "RMS error of the trajectory's positions over the drive [m]: motion capture 0 "
+                "(default), a tracking camera about 0.02, wheel odometry more; widens sigma",
+                false, 0.0, "M", cmd);
             TCLAP::ValueArg<std::string> argChannel(
                 "", "channel", "Channel of the exchanges, CH or CH/BW (WSR dataset: 108)", false,
                 "108", "CH", cmd);
@@ -209,6 +214,7 @@ int main(int argc, char** argv)
             sar::SarOptions options;
             // The channel the frames say (a rawlog's), else --channel's (.dat records have none).
             options.carrier_Hz = rxFrames.front()->chanspec.centerFrequencyHz();
+            options.positionStd_m = argPositionStd.getValue();
             // Exchanges with positions at a CSI-to-trajectory time offset.
             const auto exchangesAt = [&](double offset)
             {

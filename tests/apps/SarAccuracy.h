@@ -35,7 +35,8 @@ struct RoomResult
 
 /** One room: `positionErrorRms_m` > 0 adds a smooth error to the positions the estimator sees. */
 inline RoomResult runRoom(
-    uint32_t seed, const std::string& arraysDir, double positionErrorRms_m = 0)
+    uint32_t seed, const std::string& arraysDir, double positionErrorRms_m = 0,
+    double positionStd_m = 0)
 {
     sim::RandomRoomOptions ro;
     ro.arraysDir = arraysDir;
@@ -83,6 +84,7 @@ inline RoomResult runRoom(
         channel, moverAt, t0, t0 + still + arcTime, moverMac, peers, eo, seed);
     sar::SarOptions so;
     so.carrier_Hz = eo.chanspec.centerFrequencyHz();
+    so.positionStd_m = positionStd_m;
     for (size_t m = 0; m < peers.size(); ++m)
     {
         std::vector<CObservationWiFiCSI::Ptr> mover;

@@ -29,6 +29,9 @@ int main(int argc, char** argv)
                 "RMS of a smooth error added to the positions the estimator sees [m] (a "
                 "tracking camera's: about 0.02)",
                 false, 0.0, "M", cmd);
+            TCLAP::ValueArg<double> argPosStd(
+                "", "position-std", "The estimator's SarOptions::positionStd_m [m]", false, 0.0,
+                "M", cmd);
             cmd.parse(argc, argv);
             const uint32_t first = argEval.getValue() ? sim::kFirstEvaluationSeed : 1;
             std::vector<double> errors;
@@ -39,7 +42,7 @@ int main(int argc, char** argv)
             {
                 const auto room = sartest::runRoom(
                     first + i, std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays",
-                    argPosErr.getValue());
+                    argPosErr.getValue(), argPosStd.getValue());
                 std::printf("%4u  %4.1f x %4.1f ", room.seed, room.width, room.height);
                 double worst = 0;
                 for (const auto& p : room.peers)

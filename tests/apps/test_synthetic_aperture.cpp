@@ -69,6 +69,24 @@ TEST(SyntheticAperture, FindsThePeerFromAnArcWithLostPacketsAndAStandstill)
         }
 }
 
+TEST(SyntheticAperture, APositionErrorOfTheTrajectoryWidensSigma)
+{
+    // A tracking camera's 2 cm over a 1 m path: about 4·0.02/1 rad (4.6°) more in quadrature.
+    sar::SarOptions options;
+    options.carrier_Hz = kCarrier_Hz;
+    std::string why;
+    const auto ex = arcExchanges(mrpt::DEG2RAD(40), 3.0, 5);
+    const auto exact = sar::estimateBearing(ex, options, why);
+    options.positionStd_m = 0.02;
+    const auto camera = sar::estimateBearing(ex, options, why);
+    ASSERT_TRUE(exact && camera) << why;
+    EXPECT_EQ(exact->azimuth_rad, camera->azimuth_rad);  // only σ changes
+    EXPECT_NEAR(
+        mrpt::RAD2DEG(camera->azimuthStd_rad),
+        mrpt::RAD2DEG(std::hypot(exact->azimuthStd_rad, 4 * 0.02 / exact->apertureLength_m)), 1e-9);
+    EXPECT_GT(mrpt::RAD2DEG(camera->azimuthStd_rad), 4.5);
+}
+
 TEST(SyntheticAperture, TooShortAPathGivesNoBearingAndSaysWhy)
 {
     auto ex = arcExchanges(0.3, 3.0, 7);

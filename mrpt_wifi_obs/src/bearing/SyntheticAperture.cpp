@@ -277,6 +277,10 @@ std::optional<SarEstimate> estimateBearing(
     if (est.coherence > 0 && est.coherence < options.coherenceReference)
         est.azimuthStd_rad *=
             std::pow(options.coherenceReference / est.coherence, options.coherenceExponent);
+    // A smooth position error bends the aperture: its effect on the bearing grows with the
+    // error and shrinks with the path's length.
+    const double fromPath = options.positionStdGain * options.positionStd_m / est.apertureLength_m;
+    est.azimuthStd_rad = std::hypot(est.azimuthStd_rad, fromPath);
     return est;
 }
 
