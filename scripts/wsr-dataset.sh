@@ -8,8 +8,13 @@
 # DATASET_ROOT holds Dataset/ and config_files/ (e.g. ../shared/data/wsr). Displacement
 # sources: OptiTrack (rx_trajectory), T265 and wheel odometry (each rigidly aligned to
 # OptiTrack over the exchanges, so that the bearings are in the frame of the true positions),
-# with their position errors given as --position-std (T265 0.02 m, wheel odometry 0.05 m).
+# with their position errors given as --position-std (T265 0.02 m, wheel odometry 0.05 m) and
+# T265's antenna offset (below).
 set -euo pipefail
+# The antenna in the T265's body frame: the lever arm that best maps T265 onto OptiTrack, fitted
+# on the development sets (LOS_Set_A: -0.222 -0.069, NLOS_Set_C: -0.207 -0.085; their mean), a
+# calibration of the robot like a sensor pose, used unchanged on every set.
+t265_offset=${WSR_T265_OFFSET:-"-0.215 -0.077"}
 build=$(realpath "$1"); root=$(realpath "$2"); out=$3; shift 3
 mkdir -p "$out"; out=$(realpath "$out")
 for set in "$@"; do
@@ -22,7 +27,7 @@ for set in "$@"; do
         stamp=$(basename "$rx" .dat); stamp=${stamp#csi_rx_}
         case $src in
           optitrack) traj=(--trajectory "$loc/rx_trajectory_${stamp}_.csv") ;;
-          t265) traj=(--trajectory "$loc/t265_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv" --position-std 0.02) ;;
+          t265) traj=(--trajectory "$loc/t265_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv" --position-std 0.02 --antenna-offset "$t265_offset") ;;
           odom) traj=(--trajectory "$loc/odom_rx_trajectory_${stamp}_.csv" --align-to "$loc/rx_trajectory_${stamp}_.csv" --position-std 0.05) ;;
         esac
         txs=(); for t in "$loc"/csi_tx*_"$stamp".dat; do txs+=(--tx "$t"); done

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <sstream>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -82,6 +83,11 @@ int main(int argc, char** argv)
                 "Known peer positions (TransmitterMap YAML, by MAC): also locate the moving robot "
                 "at its start from its bearings (weighted least squares; WSR's localization)",
                 false, "", "PEERS.yaml", cmd);
+            TCLAP::ValueArg<std::string> argAntennaOffset(
+                "", "antenna-offset",
+                "Where the antenna is in the trajectory's body frame, 'x y' [m] (a tracking "
+                "camera mounted away from the antenna); needs the trajectory's heading",
+                false, "0 0", "x y", cmd);
             TCLAP::ValueArg<double> argPositionStd(
                 "", "position-std",
                 "RMS error of the trajectory's positions over the drive [m]: motion capture 0 "
@@ -128,6 +134,19 @@ int main(int argc, char** argv)
                 return odo;
             };
             Trajectory2D traj = readTrajectory(argTraj.getValue());
+            {
+                std::istringstream is(argAntennaOffset.getValue());
+                double ax = 0, ay = 0;
+                if (!(is >> ax >> ay))
+                    throw std::invalid_argument(
+                        "--antenna-offset: expected 'x y' in metres, got '" +
+                        argAntennaOffset.getValue() + "'");
+                for (auto& p : traj.poses)
+                {
+                    const double c = std::cos(p.phi), s = std::sin(p.phi);
+                    p.x += c * ax - s * ay, p.y += s * ax + c * ay;
+                }
+            }
             std::optional<TransmitterMap> truth;
             if (argTruth.isSet()) truth = TransmitterMap::fromYamlFile(argTruth.getValue());
 

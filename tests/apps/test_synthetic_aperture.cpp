@@ -320,6 +320,17 @@ TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
     EXPECT_EQ(WEXITSTATUS(status), 1) << out;
     EXPECT_NE(out.find("no bearing"), std::string::npos) << out;
     EXPECT_NE(out.find("fall inside the trajectory's time span"), std::string::npos) << out;
+    // A malformed option: named, exit 1.
+    const auto bad = popen(
+        (test::binDir() + "/wifi-sar -q --rx a.dat --tx b.dat --trajectory " + loc +
+         "rx_trajectory_" + s + "_.csv --antenna-offset '0.1' 2>&1")
+            .c_str(),
+        "r");
+    ASSERT_TRUE(bad);
+    out.clear();
+    while (size_t n = fread(buf, 1, sizeof(buf), bad)) out.append(buf, n);
+    EXPECT_EQ(WEXITSTATUS(pclose(bad)), 1) << out;
+    EXPECT_NE(out.find("--antenna-offset"), std::string::npos) << out;
     // A missing file: the error names it, exit 1.
     const auto missing = popen(
         (test::binDir() + "/wifi-sar -q --rx /nonexistent.dat --tx x.dat --trajectory y.csv 2>&1")
