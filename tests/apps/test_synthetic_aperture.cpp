@@ -22,6 +22,18 @@ namespace
 {
 constexpr double kCarrier_Hz = 5.54e9;
 
+/** Runs a shell command; its exit status (−1 if it did not exit) and combined output. */
+std::pair<int, std::string> runCommand(const std::string& cmd)
+{
+    FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+    if (!p) return {-1, "popen failed"};
+    std::string out;
+    char buf[4096];
+    while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
+    const int status = pclose(p);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
 /** Exchanges along a 1 m arc (as the WSR robot drives it) after 5 s standing still, the peer
  *  at `range` along `azimuth` from the arc's start; 40 % of packets lost at random. */
 std::vector<sar::Exchange> arcExchanges(double azimuth, double range, unsigned seed)
@@ -169,15 +181,9 @@ TEST(WifiSar, RealRecordingGivesOneBearingPerPeer)
                             ".dat --tx " + loc + "csi_tx2_" + s + ".dat --tx " + loc + "csi_tx3_" +
                             s + ".dat --tx " + loc + "csi_tx4_" + s + ".dat --trajectory " + loc +
                             "rx_trajectory_" + s + "_.csv --truth " + tmp.file("peers.yaml") +
-                            " --csv " + tmp.file("out.csv") + " 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(p);
-    std::string out;
-    char buf[4096];
-    while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-    const int status = pclose(p);
-    ASSERT_TRUE(WIFEXITED(status));
-    ASSERT_EQ(WEXITSTATUS(status), 0) << out;
+                            " --csv " + tmp.file("out.csv");
+    const auto [status, out] = runCommand(cmd);
+    ASSERT_EQ(status, 0) << out;
     // Each peer's file is matched to its sender by reciprocity (the files don't say).
     for (const char* pairing : {"csi_tx2_", "csi_tx3_", "csi_tx4_"})
         EXPECT_NE(out.find(pairing), std::string::npos) << out;
@@ -309,37 +315,20 @@ TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
     // The right files, the trajectory shifted by an hour: no exchange inside it.
     const std::string cmd = test::binDir() + "/wifi-sar -q --rx " + loc + "csi_rx_" + s +
                             ".dat --tx " + loc + "csi_tx2_" + s + ".dat --trajectory " + loc +
-                            "rx_trajectory_" + s + "_.csv --time-offset 3600 2>&1";
-    FILE* p = popen(cmd.c_str(), "r");
-    ASSERT_TRUE(p);
-    std::string out;
-    char buf[4096];
-    while (size_t n = fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-    const int status = pclose(p);
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 1) << out;
+                            "rx_trajectory_" + s + "_.csv --time-offset 3600";
+    const auto [status, out] = runCommand(cmd);
+    EXPECT_EQ(status, 1) << out;
     EXPECT_NE(out.find("no bearing"), std::string::npos) << out;
     EXPECT_NE(out.find("fall inside the trajectory's time span"), std::string::npos) << out;
     // A malformed option: named, exit 1.
-    const auto bad = popen(
-        (test::binDir() + "/wifi-sar -q --rx a.dat --tx b.dat --trajectory " + loc +
-         "rx_trajectory_" + s + "_.csv --antenna-offset '0.1' 2>&1")
-            .c_str(),
-        "r");
-    ASSERT_TRUE(bad);
-    out.clear();
-    while (size_t n = fread(buf, 1, sizeof(buf), bad)) out.append(buf, n);
-    EXPECT_EQ(WEXITSTATUS(pclose(bad)), 1) << out;
-    EXPECT_NE(out.find("--antenna-offset"), std::string::npos) << out;
+    const auto [badStatus, badOut] = runCommand(
+        test::binDir() + "/wifi-sar -q --rx a.dat --tx b.dat --trajectory " + loc +
+        "rx_trajectory_" + s + "_.csv --antenna-offset '0.1'");
+    EXPECT_EQ(badStatus, 1) << badOut;
+    EXPECT_NE(badOut.find("--antenna-offset"), std::string::npos) << badOut;
     // A missing file: the error names it, exit 1.
-    const auto missing = popen(
-        (test::binDir() + "/wifi-sar -q --rx /nonexistent.dat --tx x.dat --trajectory y.csv 2>&1")
-            .c_str(),
-        "r");
-    ASSERT_TRUE(missing);
-    out.clear();
-    while (size_t n = fread(buf, 1, sizeof(buf), missing)) out.append(buf, n);
-    const int st2 = pclose(missing);
-    EXPECT_EQ(WEXITSTATUS(st2), 1) << out;
-    EXPECT_NE(out.find("y.csv"), std::string::npos) << out;
+    const auto [missingStatus, missingOut] = runCommand(
+        test::binDir() + "/wifi-sar -q --rx /nonexistent.dat --tx x.dat --trajectory y.csv");
+    EXPECT_EQ(missingStatus, 1) << missingOut;
+    EXPECT_NE(missingOut.find("y.csv"), std::string::npos) << missingOut;
 }
