@@ -7,6 +7,7 @@
 #include <mrpt/core/bits_math.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
@@ -19,8 +20,8 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <sstream>
+#include <unordered_map>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -40,6 +41,60 @@ std::vector<CObservationWiFiCSI::Ptr> decodeFrames(
     if (!summary.rejected.empty())
         std::cerr << "wifi-sar: " << path << ": " << summary.asString() << "\n";
     return frames;
+}
+
+/** DIR/MAC-profile.png (the far-field profile, estimate and truth) and DIR/MAC-aperture.png
+ *  (the path of the exchanges and the bearing); `trueAz` NaN when unknown. */
+void writeProfilePictures(
+    const std::string& dir, const MacAddress& mac, const std::string& file,
+    const sar::SarEstimate& est, double trueAz, const std::vector<sar::Exchange>& exchanges)
+{
+    namespace plot = localization::plot;
+    std::string name = dir + "/" + mac.asString();
+    std::replace(name.begin() + long(dir.size()), name.end(), ':', '-');
+    const auto line = [](const std::string& title, std::vector<double> x, std::vector<double> y,
+                         const char* style) {
+        return plot::Series{title, x, y, style};
+    };
+    const char* estimateStyle = "lines lw 2 lc rgb 'red'";
+    const char* truthStyle = "lines lw 2 dt 2 lc rgb 'black'";
+
+    plot::Figure prof;
+    prof.title = mac.asString() + " (" + mrpt::system::extractFileName(file) +
+                 "): Bartlett profile of the synthetic aperture";
+    prof.xlabel = "azimuth in the trajectory's frame [deg]";
+    prof.ylabel = "power / peak";
+    plot::Series ps{"far-field profile", {}, {}};
+    const double step = 360.0 / double(est.profile.size());
+    for (size_t a = 0; a < est.profile.size(); ++a)
+        ps.x.push_back(-180.0 + double(a) * step), ps.y.push_back(est.profile[a]);
+    prof.series.push_back(ps);
+    const double estDeg = mrpt::RAD2DEG(est.azimuth_rad), trueDeg = mrpt::RAD2DEG(trueAz);
+    prof.series.push_back(line("estimate", {estDeg, estDeg}, {0.0, 1.05}, estimateStyle));
+    if (!std::isnan(trueAz))
+        prof.series.push_back(line("truth", {trueDeg, trueDeg}, {0.0, 1.05}, truthStyle));
+
+    plot::Figure ap;
+    ap.title = mac.asString() + ": path of the used exchanges and the bearing";
+    ap.xlabel = "x [m]", ap.ylabel = "y [m]", ap.equalAxes = true;
+    plot::Series path{"path", {}, {}};
+    for (const auto& e : exchanges) path.x.push_back(e.position.x), path.y.push_back(e.position.y);
+    ap.series.push_back(path);
+    const auto ray = [&](const std::string& title, double az, const char* style)
+    {
+        constexpr double kLength_m = 2.0;
+        return line(
+            title, {est.start.x, est.start.x + kLength_m * std::cos(az)},
+            {est.start.y, est.start.y + kLength_m * std::sin(az)}, style);
+    };
+    ap.series.push_back(ray("bearing", est.azimuth_rad, estimateStyle));
+    if (!std::isnan(trueAz)) ap.series.push_back(ray("truth", trueAz, truthStyle));
+
+    mrpt::system::createDirectory(dir);
+    std::string why;
+    if (!plot::savePng(prof, name + "-profile.png", &why) ||
+        !plot::savePng(ap, name + "-aperture.png", &why))
+        std::cerr << "wifi-sar: no profile pictures: " << why << "\n";
 }
 
 }  // namespace
@@ -81,7 +136,8 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<std::string> argLocate(
                 "", "locate",
                 "Known peer positions (TransmitterMap YAML, by MAC): also locate the moving robot "
-                "at its start from its bearings (weighted least squares; WSR's localization)",
+                "at its start from its bearings (the device mapper's robust triangulation; WSR's "
+                "localization)",
                 false, "", "PEERS.yaml", cmd);
             TCLAP::ValueArg<std::string> argAntennaOffset(
                 "", "antenna-offset",
@@ -136,32 +192,33 @@ int main(int argc, char** argv)
             Trajectory2D traj = readTrajectory(argTraj.getValue());
             {
                 std::istringstream is(argAntennaOffset.getValue());
-                double ax = 0, ay = 0;
-                if (!(is >> ax >> ay))
+                mrpt::math::TPoint2D offset;
+                if (!(is >> offset.x >> offset.y))
                     throw std::invalid_argument(
                         "--antenna-offset: expected 'x y' in metres, got '" +
                         argAntennaOffset.getValue() + "'");
                 for (auto& p : traj.poses)
                 {
-                    const double c = std::cos(p.phi), s = std::sin(p.phi);
-                    p.x += c * ax - s * ay, p.y += s * ax + c * ay;
+                    const auto antenna = mrpt::poses::CPose2D(p).composePoint(offset);
+                    p.x = antenna.x, p.y = antenna.y;
                 }
             }
             std::optional<TransmitterMap> truth;
             if (argTruth.isSet()) truth = TransmitterMap::fromYamlFile(argTruth.getValue());
 
             const auto rxFrames = decodeFrames(argRx.getValue(), decode, quiet);
-            std::map<std::string, std::vector<CObservationWiFiCSI::Ptr>> bySender;
-            for (const auto& f : rxFrames) bySender[f->transmitter.asString()].push_back(f);
+            std::unordered_map<MacAddress, std::vector<CObservationWiFiCSI::Ptr>> bySender;
+            for (const auto& f : rxFrames) bySender[f->transmitter].push_back(f);
             if (bySender.empty())
                 throw std::runtime_error("'" + argRx.getValue() + "' holds no CSI frames");
 
             // Which sender each --tx file belongs to, and its exchanges.
             struct Peer
             {
-                std::string file, mac;
-                std::vector<std::pair<double, std::complex<double>>> products;  // time, product
-                std::vector<sar::Exchange> exchanges;
+                std::string file;
+                MacAddress mac;
+                std::vector<sar::PairedProduct> products;
+                std::vector<sar::Exchange> exchanges;  // the products placed on the trajectory
                 size_t pairs = 0;
             };
             std::vector<Peer> peers;
@@ -173,10 +230,10 @@ int main(int argc, char** argv)
                 const auto txFrames = decodeFrames(peer.file, decode, quiet);
                 if (at != std::string::npos)
                 {
-                    peer.mac = MacAddress::fromString(spec.substr(at + 1)).asString();
+                    peer.mac = MacAddress::fromString(spec.substr(at + 1));
                     if (!bySender.count(peer.mac))
                         throw std::runtime_error(
-                            "--tx " + spec + ": no frame from " + peer.mac + " in '" +
+                            "--tx " + spec + ": no frame from " + peer.mac.asString() + " in '" +
                             argRx.getValue() + "'");
                 }
                 else
@@ -191,8 +248,8 @@ int main(int argc, char** argv)
                         else
                             second = std::max(second, score);
                     }
-                    std::cout << peer.file << ": sender " << peer.mac << " (amplitude correlation "
-                              << best << ", next " << second << ")\n";
+                    std::cout << peer.file << ": sender " << peer.mac.asString()
+                              << " (amplitude correlation " << best << ", next " << second << ")\n";
                     if (best < 0.5 || best - second < 0.2)
                         throw std::runtime_error(
                             "--tx " + peer.file +
@@ -200,10 +257,9 @@ int main(int argc, char** argv)
                             std::to_string(best) + " vs " + std::to_string(second) +
                             "); name it as FILE@MAC");
                 }
-                for (const auto& pp : sar::pairedProducts(
-                         bySender[peer.mac], txFrames, argRxChain.getValue(),
-                         argPeerChain.getValue(), &peer.pairs))
-                    peer.products.emplace_back(pp.time_s, pp.product);
+                peer.products = sar::pairedProducts(
+                    bySender[peer.mac], txFrames, argRxChain.getValue(), argPeerChain.getValue(),
+                    &peer.pairs);
                 peers.push_back(std::move(peer));
             }
 
@@ -214,8 +270,8 @@ int main(int argc, char** argv)
                 const auto ref = readTrajectory(argAlign.getValue());
                 double t0 = HUGE_VAL, t1 = -HUGE_VAL;
                 for (const auto& peer : peers)
-                    for (const auto& pr : peer.products)
-                        t0 = std::min(t0, pr.first), t1 = std::max(t1, pr.first);
+                    for (const auto& pp : peer.products)
+                        t0 = std::min(t0, pp.time_s), t1 = std::max(t1, pp.time_s);
                 std::vector<mrpt::math::TPoint2D> a, b;
                 for (size_t i = 0; i < traj.size(); ++i)
                 {
@@ -234,25 +290,17 @@ int main(int argc, char** argv)
             // The channel the frames say (a rawlog's), else --channel's (.dat records have none).
             options.carrier_Hz = rxFrames.front()->chanspec.centerFrequencyHz();
             options.positionStd_m = argPositionStd.getValue();
-            // Exchanges with positions at a CSI-to-trajectory time offset.
-            const auto exchangesAt = [&](double offset)
-            {
-                for (auto& peer : peers)
-                {
-                    peer.exchanges.clear();
-                    for (const auto& [t, product] : peer.products)
-                    {
-                        mrpt::math::TPose2D pose;
-                        if (traj.interpolate(t + offset, pose, 0.5))
-                            peer.exchanges.push_back({t, {pose.x, pose.y}, product});
-                    }
-                }
-            };
             // A search for the offset that maximises the peers' coherence was tried: on the
             // development recordings coherence hardly changes with the offset (the bearing
             // absorbs it), so the offset it picks made errors worse; the offset is an input.
             const double offset = argTimeOffset.getValue();
-            exchangesAt(offset);
+            for (auto& peer : peers)
+                for (const auto& pp : peer.products)
+                {
+                    mrpt::math::TPose2D pose;
+                    if (traj.interpolate(pp.time_s + offset, pose, 0.5))
+                        peer.exchanges.push_back({pp.time_s, {pose.x, pose.y}, pp.product});
+                }
 
             std::ofstream csv;
             if (argCsv.isSet())
@@ -264,7 +312,8 @@ int main(int argc, char** argv)
                        "coherence,time_offset\n";
             }
             int failed = 0;
-            std::vector<std::pair<mrpt::math::TPoint2D, sar::SarEstimate>> located;  // peer, est
+            std::vector<BearingToKnown> toKnownPeers;
+            std::optional<mrpt::math::TPoint2D> start;  // of the first peer with a bearing
             std::vector<BearingRecord> records;
             const auto knownPeers =
                 argLocate.isSet()
@@ -283,8 +332,8 @@ int main(int argc, char** argv)
                                   std::to_string(traj.t.front()) + " to " +
                                   std::to_string(traj.t.back()) +
                                   "): check its clock or --time-offset";
-                    std::cout << peer.mac << " (" << peer.file << "): no bearing: " << whyNot
-                              << "\n";
+                    std::cout << peer.mac.asString() << " (" << peer.file
+                              << "): no bearing: " << whyNot << "\n";
                     ++failed;
                     continue;
                 }
@@ -294,78 +343,33 @@ int main(int argc, char** argv)
                     traj.interpolate(est->startTime_s + offset, at, 0.5);
                     BearingRecord r;
                     r.t = est->startTime_s;  // CSI clock, as the odometry written below
-                    r.transmitter = MacAddress::fromString(peer.mac);
+                    r.transmitter = peer.mac;
                     r.hasAoa = true;
                     r.aoa = std::remainder(est->azimuth_rad - at.phi, 2 * M_PI);
                     r.aoaStd = est->azimuthStd_rad;
                     records.push_back(r);
                 }
+                if (!start) start = est->start;
                 if (knownPeers)
-                    if (const auto* k = knownPeers->find(MacAddress::fromString(peer.mac)))
-                        located.emplace_back(mrpt::math::TPoint2D(k->pose.x, k->pose.y), *est);
+                    if (const auto* k = knownPeers->find(peer.mac))
+                        toKnownPeers.push_back(
+                            {{k->pose.x, k->pose.y}, est->azimuth_rad, est->azimuthStd_rad});
                 double trueAz = std::nan(""), err = std::nan("");
                 if (truth)
-                    if (const auto* k = truth->find(MacAddress::fromString(peer.mac)))
+                    if (const auto* k = truth->find(peer.mac))
                     {
                         trueAz = std::atan2(k->pose.y - est->start.y, k->pose.x - est->start.x);
                         err = std::remainder(est->azimuth_rad - trueAz, 2 * M_PI);
                     }
                 if (argProfiles.isSet())
-                {
-                    namespace plot = localization::plot;
-                    const std::string base = argProfiles.getValue() + "/" + peer.mac;
-                    std::string name = base;
-                    for (auto& c : name)
-                        if (c == ':') c = '-';
-                    plot::Figure prof;
-                    prof.title = peer.mac + " (" + mrpt::system::extractFileName(peer.file) +
-                                 "): Bartlett profile of the synthetic aperture";
-                    prof.xlabel = "azimuth in the trajectory's frame [deg]";
-                    prof.ylabel = "power / peak";
-                    plot::Series ps{"far-field profile", {}, {}};
-                    const double step = 360.0 / double(est->profile.size());
-                    for (size_t a = 0; a < est->profile.size(); ++a)
-                        ps.x.push_back(-180.0 + double(a) * step), ps.y.push_back(est->profile[a]);
-                    prof.series.push_back(ps);
-                    const auto vline = [](double deg, const std::string& title, const char* style) {
-                        return plot::Series{title, {deg, deg}, {0.0, 1.05}, style};
-                    };
-                    prof.series.push_back(vline(
-                        mrpt::RAD2DEG(est->azimuth_rad), "estimate", "lines lw 2 lc rgb 'red'"));
-                    if (!std::isnan(trueAz))
-                        prof.series.push_back(vline(
-                            mrpt::RAD2DEG(trueAz), "truth", "lines lw 2 dt 2 lc rgb 'black'"));
-                    plot::Figure ap;
-                    ap.title = peer.mac + ": path of the used exchanges and the bearing";
-                    ap.xlabel = "x [m]", ap.ylabel = "y [m]", ap.equalAxes = true;
-                    plot::Series path{"path", {}, {}};
-                    for (const auto& e : peer.exchanges)
-                        path.x.push_back(e.position.x), path.y.push_back(e.position.y);
-                    ap.series.push_back(path);
-                    const double len = 2.0;
-                    ap.series.push_back(
-                        {"bearing",
-                         {est->start.x, est->start.x + len * std::cos(est->azimuth_rad)},
-                         {est->start.y, est->start.y + len * std::sin(est->azimuth_rad)},
-                         "lines lw 2 lc rgb 'red'"});
-                    if (!std::isnan(trueAz))
-                        ap.series.push_back(
-                            {"truth",
-                             {est->start.x, est->start.x + len * std::cos(trueAz)},
-                             {est->start.y, est->start.y + len * std::sin(trueAz)},
-                             "lines lw 2 dt 2 lc rgb 'black'"});
-                    mrpt::system::createDirectory(argProfiles.getValue());
-                    std::string why;
-                    if (!plot::savePng(prof, name + "-profile.png", &why) ||
-                        !plot::savePng(ap, name + "-aperture.png", &why))
-                        std::cerr << "wifi-sar: no profile pictures: " << why << "\n";
-                }
+                    writeProfilePictures(
+                        argProfiles.getValue(), peer.mac, peer.file, *est, trueAz, peer.exchanges);
                 char line[512];
                 std::snprintf(
                     line, sizeof(line),
                     "%s azimuth %7.2f deg  sigma %5.2f  quality %.2f  packets %zu of %zu  "
                     "aperture %.2f m  start (%.3f, %.3f)%s",
-                    peer.mac.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
+                    peer.mac.asString().c_str(), mrpt::RAD2DEG(est->azimuth_rad),
                     mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed, peer.pairs,
                     est->apertureLength_m, est->start.x, est->start.y,
                     std::isnan(err)
@@ -378,29 +382,27 @@ int main(int argc, char** argv)
                         line, sizeof(line),
                         "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%."
                         "3f\n",
-                        peer.mac.c_str(), peer.file.c_str(), mrpt::RAD2DEG(est->azimuth_rad),
-                        mrpt::RAD2DEG(est->azimuthStd_rad), est->quality, est->packetsUsed,
-                        est->start.x, est->start.y, est->startTime_s, est->apertureLength_m,
-                        est->range_m, peer.pairs, mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err),
-                        est->coherence, offset);
+                        peer.mac.asString().c_str(), peer.file.c_str(),
+                        mrpt::RAD2DEG(est->azimuth_rad), mrpt::RAD2DEG(est->azimuthStd_rad),
+                        est->quality, est->packetsUsed, est->start.x, est->start.y,
+                        est->startTime_s, est->apertureLength_m, est->range_m, peer.pairs,
+                        mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err), est->coherence, offset);
                     csv << line;
                 }
             }
             if (knownPeers)
             {
-                if (located.size() < 2)
-                    std::cout << "not located: bearings to " << located.size()
-                              << " peer(s) of the map, 2 needed\n";
+                // The bearings are taken from each peer's own start; they differ by the packets
+                // dropped at the start, by millimetres.
+                const auto p = locateObserver(toKnownPeers);
+                if (!p.localized)
+                    std::cout << "not located: " << p.note << "\n";
                 else
-                {
-                    const auto p = sar::locateFromBearings(located);
-                    // The bearings are taken from each peer's own start; they differ by the packets
-                    // dropped at the start, by millimetres.
-                    const auto& start = located.front().second.start;
                     std::printf(
-                        "located: (%.3f, %.3f), %.3f m from the trajectory's start (%.3f, %.3f)\n",
-                        p.x, p.y, (p - start).norm(), start.x, start.y);
-                }
+                        "located: (%.3f, %.3f), %.3f m from the trajectory's start (%.3f, %.3f); "
+                        "1-sigma %.3f m\n",
+                        p.x, p.y, std::hypot(p.x - start->x, p.y - start->y), start->x, start->y,
+                        std::sqrt(0.5 * (p.cov[0] + p.cov[2])));
             }
             if (argRawlogOut.isSet())
             {

@@ -219,6 +219,21 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
     return d;
 }
 
+DeviceEstimate locateObserver(const std::vector<BearingToKnown>& bearings, DeviceMapOptions o)
+{
+    std::vector<BearingRay> rays;
+    for (const auto& b : bearings)
+    {
+        BearingRay r;
+        r.x = b.transmitter.x, r.y = b.transmitter.y;
+        r.aoa = wrapToPi(b.bearing_rad + M_PI);
+        r.sigma = b.sigma_rad;
+        rays.push_back(r);
+    }
+    o.minRays = std::min<size_t>(o.minRays, 2);
+    return triangulateDevice(rays, o);
+}
+
 void saveDeviceCsv(const std::string& path, const std::vector<DeviceEstimate>& devs)
 {
     std::ofstream f(path);

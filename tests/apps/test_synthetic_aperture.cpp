@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <mrpt/core/bits_math.h>
 #include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
 #include <sys/wait.h>
@@ -136,18 +137,20 @@ TEST(SyntheticAperture, LocatesTheStartFromBearingsToKnownPeers)
     const mrpt::math::TPoint2D start(0.7, -0.4);
     const std::vector<mrpt::math::TPoint2D> peers = {{-2.42, 2.65}, {2.53, -2.65}, {-3.73, -1.49}};
     const std::vector<double> noise_deg = {1.5, -2.0, 0.5};
-    std::vector<std::pair<mrpt::math::TPoint2D, sar::SarEstimate>> in;
+    std::vector<localization::BearingToKnown> in;
     for (size_t i = 0; i < peers.size(); ++i)
-    {
-        sar::SarEstimate e;
-        e.azimuth_rad =
-            std::atan2(peers[i].y - start.y, peers[i].x - start.x) + mrpt::DEG2RAD(noise_deg[i]);
-        e.azimuthStd_rad = mrpt::DEG2RAD(2.0);
-        in.emplace_back(peers[i], e);
-    }
-    EXPECT_LT((sar::locateFromBearings(in) - start).norm(), 0.2);
-    for (auto& [q, e] : in) e.azimuth_rad = std::atan2(q.y - start.y, q.x - start.x);
-    EXPECT_LT((sar::locateFromBearings(in) - start).norm(), 1e-4);  // exact bearings: exact
+        in.push_back(
+            {peers[i],
+             std::atan2(peers[i].y - start.y, peers[i].x - start.x) + mrpt::DEG2RAD(noise_deg[i]),
+             mrpt::DEG2RAD(2.0)});
+    const auto noisy = localization::locateObserver(in);
+    ASSERT_TRUE(noisy.localized) << noisy.note;
+    EXPECT_LT(std::hypot(noisy.x - start.x, noisy.y - start.y), 0.2);
+    for (auto& b : in)
+        b.bearing_rad = std::atan2(b.transmitter.y - start.y, b.transmitter.x - start.x);
+    const auto exact = localization::locateObserver(in);
+    ASSERT_TRUE(exact.localized) << exact.note;
+    EXPECT_LT(std::hypot(exact.x - start.x, exact.y - start.y), 1e-4);  // exact bearings: exact
 }
 
 TEST(SyntheticAperture, PairsByCounterAcrossA16BitWrap)

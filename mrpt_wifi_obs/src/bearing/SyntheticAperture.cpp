@@ -1,18 +1,19 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/bits_math.h>
+#include <mrpt/math/wrap2pi.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace mrpt_wifi::sar
 {
 namespace
 {
-constexpr double kSpeedOfLight = 299792458.0;
-
 /** The values of one chain pair at the reported subcarriers, in subcarrier order. */
 bool chainValues(
     const CObservationWiFiCSI& f, unsigned rx, std::vector<int>& ks,
@@ -25,11 +26,6 @@ bool chainValues(
     for (size_t i = 0; i < ks.size(); ++i)
         h[i] = std::complex<double>(f.at(0, rx, subcarrierToBin(ks[i], f.nfft())));
     return true;
-}
-
-double wrap(double a)
-{
-    return std::remainder(a, 2 * M_PI);
 }
 }  // namespace
 
@@ -50,15 +46,15 @@ std::optional<std::complex<double>> combinedProduct(
     std::vector<std::complex<double>> p(a.size());
     for (size_t i = 0; i < a.size(); ++i) p[i] = a[i] * b[i];
     // Delay slope: least-squares line through the unwrapped phase across subcarriers (the
-    // product's phase turns by well under π between neighbours at these delays). A slope from
-    // the magnitude-weighted rotation between neighbours was tried: on the WSR development
-    // recordings its profiles lost their peak (one peer's main peak 0.6 → side lobes at 0.9).
+    // product's phase turns by well under π between neighbours at these delays). The
+    // preprocessing's slope from neighbouring subcarriers' rotations
+    // (CsiPreprocessor::estimatePhaseSlope) was tried on these products: on the WSR development
+    // sets it took LOS_Set_A's bearing error from 2.7° to 29° mean (its profiles lose their peak).
+    // (MRPT's unwrap2PiSequence adds at most one turn per value, not the running sum.)
     std::vector<double> phase(p.size());
     for (size_t i = 0; i < p.size(); ++i)
-    {
-        phase[i] = std::arg(p[i]);
-        if (i > 0) phase[i] = phase[i - 1] + wrap(phase[i] - phase[i - 1]);
-    }
+        phase[i] = i == 0 ? std::arg(p[i])
+                          : phase[i - 1] + std::remainder(std::arg(p[i]) - phase[i - 1], 2 * M_PI);
     double mk = 0, mp = 0;
     for (size_t i = 0; i < p.size(); ++i) mk += ka[i], mp += phase[i];
     mk /= double(p.size()), mp /= double(p.size());
@@ -87,17 +83,14 @@ std::vector<uint64_t> unwrapCounter16(const std::vector<uint16_t>& counters)
 std::vector<std::pair<size_t, size_t>> pairByCounter(
     const std::vector<uint64_t>& moverCounters, const std::vector<uint64_t>& peerCounters)
 {
-    std::map<uint64_t, size_t> peerIndex;
+    std::unordered_map<uint64_t, size_t> peerIndex;  // first frame of each counter
     for (size_t j = 0; j < peerCounters.size(); ++j) peerIndex.emplace(peerCounters[j], j);
     std::vector<std::pair<size_t, size_t>> pairs;
-    std::map<uint64_t, bool> used;
+    std::unordered_set<uint64_t> paired;
     for (size_t i = 0; i < moverCounters.size(); ++i)
-    {
-        const auto it = peerIndex.find(moverCounters[i]);
-        if (it == peerIndex.end() || used[moverCounters[i]]) continue;
-        used[moverCounters[i]] = true;
-        pairs.emplace_back(i, it->second);
-    }
+        if (const auto it = peerIndex.find(moverCounters[i]);
+            it != peerIndex.end() && paired.insert(moverCounters[i]).second)
+            pairs.emplace_back(i, it->second);
     return pairs;
 }
 
@@ -204,7 +197,7 @@ std::optional<SarEstimate> estimateBearing(
                  std::to_string(options.minApertureLength_m) + " m needed)";
         return std::nullopt;
     }
-    const double twoK = 2.0 * 2.0 * M_PI * options.carrier_Hz / kSpeedOfLight;
+    const double twoK = 2.0 * 2.0 * M_PI * options.carrier_Hz / kSpeedOfLightMps;
     const auto farField = [&](double phi)
     {
         const double c = std::cos(phi), s = std::sin(phi);
@@ -264,7 +257,7 @@ std::optional<SarEstimate> estimateBearing(
             const double power = std::norm(acc);
             if (power > best) best = power, bestPhi = phi, bestRange = r;
         }
-    est.azimuth_rad = wrap(bestPhi);
+    est.azimuth_rad = mrpt::math::wrapToPi(bestPhi);
     est.range_m = bestRange;
     double sumAbs = 0;
     for (const auto& u : used) sumAbs += u.w * std::abs(u.h);
@@ -282,54 +275,6 @@ std::optional<SarEstimate> estimateBearing(
     const double fromPath = options.positionStdGain * options.positionStd_m / est.apertureLength_m;
     est.azimuthStd_rad = std::hypot(est.azimuthStd_rad, fromPath);
     return est;
-}
-
-mrpt::math::TPoint2D locateFromBearings(
-    const std::vector<std::pair<mrpt::math::TPoint2D, SarEstimate>>& peersAndBearings)
-{
-    // cost(p) = Σ (wrap(atan2(q − p) − φ) / σ)²; Gauss–Newton on (x, y).
-    const auto cost = [&](const mrpt::math::TPoint2D& p)
-    {
-        double c = 0;
-        for (const auto& [q, e] : peersAndBearings)
-        {
-            const double r = wrap(std::atan2(q.y - p.y, q.x - p.x) - e.azimuth_rad);
-            c += r * r / (e.azimuthStd_rad * e.azimuthStd_rad);
-        }
-        return c;
-    };
-    mrpt::math::TPoint2D best(0, 0);
-    double bestCost = HUGE_VAL;
-    for (const auto& [q0, e0] : peersAndBearings)
-        for (const double back : {0.5, 2.0, 5.0})
-        {
-            // Start on the ray back from this peer along its bearing.
-            mrpt::math::TPoint2D p(
-                q0.x - back * std::cos(e0.azimuth_rad), q0.y - back * std::sin(e0.azimuth_rad));
-            for (int it = 0; it < 50; ++it)
-            {
-                double h00 = 0, h01 = 0, h11 = 0, g0 = 0, g1 = 0;
-                for (const auto& [q, e] : peersAndBearings)
-                {
-                    const double dx = q.x - p.x, dy = q.y - p.y, d2 = dx * dx + dy * dy;
-                    if (d2 < 1e-9) continue;
-                    const double r = wrap(std::atan2(dy, dx) - e.azimuth_rad);
-                    // d atan2(dy, dx) / d(px, py) = (dy, −dx) / d²
-                    const double jx = dy / d2, jy = -dx / d2;
-                    const double w = 1.0 / (e.azimuthStd_rad * e.azimuthStd_rad);
-                    h00 += w * jx * jx, h01 += w * jx * jy, h11 += w * jy * jy;
-                    g0 += w * jx * r, g1 += w * jy * r;
-                }
-                const double det = h00 * h11 - h01 * h01;
-                if (!(std::abs(det) > 1e-12)) break;
-                const double sx = -(h11 * g0 - h01 * g1) / det, sy = -(h00 * g1 - h01 * g0) / det;
-                p.x += sx, p.y += sy;
-                if (std::hypot(sx, sy) < 1e-6) break;
-            }
-            const double c = cost(p);
-            if (std::isfinite(c) && c < bestCost) bestCost = c, best = p;
-        }
-    return best;
 }
 
 }  // namespace mrpt_wifi::sar

@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
+#include <mrpt_wifi/sim/CsiSynthesizer.h>
 #include <mrpt_wifi/sim/PacketExchange.h>
 
 #include <cmath>
@@ -44,11 +45,15 @@ ExchangeRecording simulateExchanges(
 {
     mrpt::random::CRandomGenerator rng(seed);
     const auto& ks = htGroupedSubcarriers(o.chanspec.bandwidthMHz);
-    const double fc = o.chanspec.centerFrequencyHz();
-    const double wavelength = kSpeedOfLight / fc;
+    const double wavelength = kSpeedOfLight / o.chanspec.centerFrequencyHz();
     ExchangeRecording out;
     out.heardByPeer.resize(peers.size());
     std::vector<PropagationPath> paths;
+    // Both radios have one antenna: the synthesizer's single-element arrays (no array phase).
+    const auto single = AntennaArray::singleElement();
+    const ArrayPlacement antenna{&single, 0.0, 1};
+    CsiSynthesizer synthesizer;
+    std::vector<std::complex<float>> bins;
     std::vector<cd> h(ks.size());
     for (size_t m = 0; m < peers.size(); ++m)
     {
@@ -60,13 +65,9 @@ ExchangeRecording simulateExchanges(
         {
             ++counter;
             channel.computePaths(images, moverAt(t), wavelength, paths);
+            synthesizer.synthesize(paths, antenna, antenna, o.chanspec, bins);
             for (size_t i = 0; i < ks.size(); ++i)
-            {
-                const double f = fc + ks[i] * 312.5e3;
-                h[i] = 0;
-                for (const auto& p : paths)
-                    h[i] += p.gain * std::polar(1.0, -2 * M_PI * f * p.delay_s);
-            }
+                h[i] = cd(bins[subcarrierToBin(ks[i], o.chanspec.nfft())]);
             double power = 0;
             for (const auto& v : h) power += std::norm(v);
             power /= double(h.size());

@@ -212,6 +212,7 @@ public:
                 "the .dat records carry no channel: assumed 5 GHz channel 36 (20 MHz) / 38 (40 "
                 "MHz); give --channel for the true one");
         size_t pos = 0;
+        bool sawWsr = false;
         // As read_bf_file: a record needs its 3-byte size + code.
         while (pos + 3 <= bytes.size())
         {
@@ -264,16 +265,17 @@ public:
             // the host's time, set by toObservation).
             obs->timestamp = mrpt::Clock::fromDouble(r.timestampLow * 1e-6);
             toObservation(r, cs, *obs);
-            if (r.wsr)
-                summary.noteOnce(
-                    "WSR Toolbox records: timestamps from the logging computer's clock, the "
-                    "transmitter is the sender's MAC, firmwareCounter the low 16 bits of the "
-                    "sender's frame counter (pairs a packet with its reply)");
+            sawWsr = sawWsr || r.wsr.has_value();
             ++summary.frames;
             onFrame(std::move(obs));
             pos += 2 + fieldLen;
             progress.update(pos, bytes.size());
         }
+        if (sawWsr)
+            summary.notes.push_back(
+                "WSR Toolbox records: timestamps from the logging computer's clock, the "
+                "transmitter is the sender's MAC, firmwareCounter the low 16 bits of the sender's "
+                "frame counter (pairs a packet with its reply)");
         progress.update(1, 1);
     }
 };

@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
+#include <mrpt/math/TPoint2D.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
@@ -103,6 +104,19 @@ void addOdometryDrift(
 /** Robust triangulation of one device: global grid search of the mixture likelihood (mirror
  *  candidates included), then Ceres refinement with a robust loss, then covariance. */
 DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const DeviceMapOptions& o);
+
+/** A bearing an observer at an unknown position took to a transmitter at a known one. */
+struct BearingToKnown
+{
+    mrpt::math::TPoint2D transmitter;
+    double bearing_rad = 0;  //!< world frame, from the observer towards the transmitter
+    double sigma_rad = 0.05;
+};
+
+/** Where the observer stood (WSR's localization from bearings to known robots): the point that
+ *  triangulateDevice() finds from rays cast back from each transmitter. At least 2 bearings
+ *  (DeviceMapOptions::minRays is lowered to 2). */
+DeviceEstimate locateObserver(const std::vector<BearingToKnown>& bearings, DeviceMapOptions o = {});
 
 /** Writes estimates as CSV (mac,name,x,y,cov_xx,cov_xy,cov_yy,...) and as a TransmitterMap
  *  YAML (localized devices only, one element, yaw 0). */

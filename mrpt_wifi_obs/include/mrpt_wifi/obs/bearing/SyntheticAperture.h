@@ -117,10 +117,4 @@ struct SarEstimate
 std::optional<SarEstimate> estimateBearing(
     const std::vector<Exchange>& exchanges, const SarOptions& options, std::string& whyNot);
 
-/** Where the moving robot started, from its bearings to peers at known positions (bearings in
- * the same frame as the positions): weighted least squares on the angle residuals, started
- * from every peer's surroundings so that a far start does not end in a local minimum. */
-mrpt::math::TPoint2D locateFromBearings(
-    const std::vector<std::pair<mrpt::math::TPoint2D, SarEstimate>>& peersAndBearings);
-
 }  // namespace mrpt_wifi::sar
