@@ -175,7 +175,10 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress", cmd);
-            cmd.parse(argc, argv);
+            // `--antenna-offset -0.2 -0.08` as documented, or quoted as one token.
+            cli::JoinedArgv args(argc, argv, "--antenna-offset", 2);
+            if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
+                return rc;
             const bool quiet = argQuiet.getValue();
 
             CsiDecodeOptions decode;

@@ -32,7 +32,9 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argPosStd(
                 "", "position-std", "The estimator's SarOptions::positionStd_m [m]", false, 0.0,
                 "M", cmd);
-            cmd.parse(argc, argv);
+            if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
+                rc >= 0)
+                return rc;
             const uint32_t first = argEval.getValue() ? sim::kFirstEvaluationSeed : 1;
             std::vector<double> errors;
             size_t covered = 0, failed = 0, roomsMeeting = 0;

@@ -329,6 +329,10 @@ TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
         "rx_trajectory_" + s + "_.csv --antenna-offset '0.1'");
     EXPECT_EQ(badStatus, 1) << badOut;
     EXPECT_NE(badOut.find("--antenna-offset"), std::string::npos) << badOut;
+    // --help is not a run: usage, exit 0.
+    const auto [helpStatus, helpOut] = runCommand(test::binDir() + "/wifi-sar --help");
+    EXPECT_EQ(helpStatus, 0) << helpOut;
+    EXPECT_NE(helpOut.find("--antenna-offset"), std::string::npos) << helpOut;
     // A missing file: the error names it, exit 1.
     const auto [missingStatus, missingOut] = runCommand(
         test::binDir() + "/wifi-sar -q --rx /nonexistent.dat --tx x.dat --trajectory y.csv");
