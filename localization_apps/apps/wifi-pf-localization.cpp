@@ -13,6 +13,7 @@
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt/system/CTicTac.h>
+#include <mrpt/system/datetime.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
@@ -62,6 +63,9 @@ public:
         recovery_.emplace(options, &map);
         odoModel_ = odometryModel;
     }
+    /** With odometry: each step's action is `motion`'s (the app pairs the odometry with the
+     *  bearings itself) instead of MRPT's per-step Gaussian. */
+    void setOdometryMotion(const OdometryMotion& motion) { odoMotion_ = motion; }
     const std::optional<ParticleRecovery>& recovery() const { return recovery_; }
     /** Reproducible runs. MRPT's app seeds the global generator from the clock just before its
      *  runs; its log line announcing each run (before the particles are drawn) is where the
@@ -84,7 +88,7 @@ protected:
         mrpt::obs::CObservation::Ptr& observation) override
     {
         bool ok = DataSourceRawlog::impl_get_next_observations(action, observations, observation);
-        if (recovery_) ok = pairWithOdometry(ok, action, observations, observation);
+        if (recovery_ || odoMotion_) ok = pairWithOdometry(ok, action, observations, observation);
         // Odometry readings only become the next step's action: not a filter step.
         mrpt::Clock::time_point stamp = INVALID_TIMESTAMP;
         if (ok && observation && !IS_CLASS(*observation, mrpt::obs::CObservationOdometry))
@@ -127,9 +131,19 @@ private:
         if (!ok || !observation || !lastOdo_) return ok;
         observations = mrpt::obs::CSensoryFrame::Create();
         observations->insert(observation);
+        const mrpt::poses::CPose2D increment = *lastOdo_ - *odoAtLastStep_;
         mrpt::obs::CActionRobotMovement2D act;
-        act.computeFromOdometry(*lastOdo_ - *odoAtLastStep_, odoModel_);
-        act.timestamp = observation->timestamp;
+        if (odoMotion_)
+        {
+            const bool first =
+                odoStepStamp_ == INVALID_TIMESTAMP || observation->timestamp < odoStepStamp_;
+            const double dt =
+                first ? 0.0 : mrpt::system::timeDifference(odoStepStamp_, observation->timestamp);
+            act = *odoMotion_->makeAction(dt, increment);
+        }
+        else
+            act.computeFromOdometry(increment, odoModel_);
+        act.timestamp = odoStepStamp_ = observation->timestamp;
         odoAtLastStep_ = lastOdo_;
         action = mrpt::obs::CActionCollection::Create();
         action->insert(act);
@@ -188,6 +202,8 @@ private:
     UnknownMotion motion_;
     std::optional<ConstantVelocityPrediction> cv_;
     std::optional<ParticleRecovery> recovery_;
+    std::optional<OdometryMotion> odoMotion_;
+    mrpt::Clock::time_point odoStepStamp_ = INVALID_TIMESTAMP;
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     mrpt::Clock::time_point lastOdoStamp_ = INVALID_TIMESTAMP;
@@ -355,6 +371,13 @@ int main(int argc, char** argv)
                 std::cerr << "note: no odometry: the motion model is the unknown-motion "
                           << motion.asString() << "\n";
             }
+            // With odometry: the .ini's [OdometryMotion] if it has one, else MRPT's model.
+            std::optional<OdometryMotion> odometryMotion;
+            if (!odo.empty() && ini.sectionExists("OdometryMotion"))
+            {
+                odometryMotion.emplace();
+                odometryMotion->loadFromConfigFile(ini, "OdometryMotion");
+            }
             ParticleRecoveryOptions recoveryOptions;
             recoveryOptions.loadFromConfigFile(ini, "ParticleRecovery");
             if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
@@ -412,6 +435,7 @@ int main(int argc, char** argv)
             if (odo.empty()) app.setUnknownMotion(motion);
             if (recoveryOptions.rate_hz > 0)
                 app.setRecovery(recoveryOptions, *wifiMap, odometryMotionModel(ini));
+            if (odometryMotion) app.setOdometryMotion(*odometryMotion);
             {
                 const std::string iniPath = argIni.getValue();
                 const char* a[] = {"wifi-pf-localization", iniPath.c_str(), rawlog.c_str()};
@@ -422,6 +446,10 @@ int main(int argc, char** argv)
                 app.params.write(sect, "particles_count", argParticles.getValue());
             app.params.write(sect, "logOutput_dir", outDir + "/mrpt");
             if (!txFile.empty()) app.params.write(mapSect, "transmitters_file", txFile);
+            if (odometryMotion && odometryMotion->bearingWeight != 1)
+                app.params.write(
+                    "MetricMap_wifiBearingMap_00_likelihoodOpts", "bearing_weight",
+                    wifiMap->likelihoodOptions.bearingWeight * odometryMotion->bearingWeight);
             if (areaFromInitPdf)
             {
                 const auto& a = *wifiMap->area();
@@ -447,7 +475,10 @@ int main(int argc, char** argv)
                 << "  input          : " << usable.size() << " bearings of " << txs.size()
                 << " known transmitters, "
                 << (odo.empty() ? "no odometry (" + motion.asString() + ")"
-                                : std::to_string(odo.size()) + " odometry readings")
+                                : std::to_string(odo.size()) + " odometry readings (" +
+                                      (odometryMotion ? odometryMotion->asString()
+                                                      : "MRPT's model, [DummyOdometryParams]") +
+                                      ")")
                 << "\n"
                 << "  warnings       : " << warn.summary() << "\n"
                 << "  particles      : " << counts << "\n"

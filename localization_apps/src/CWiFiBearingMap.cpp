@@ -103,10 +103,13 @@ void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
     model.maxStd_rad =
         mrpt::DEG2RAD(c.read_double(s, "max_std_deg", mrpt::RAD2DEG(model.maxStd_rad)));
     model.stdScale = c.read_double(s, "std_scale", model.stdScale);
+    bearingWeight = c.read_double(s, "bearing_weight", bearingWeight);
     if (!(model.outlierProb > 0 && model.outlierProb < 1))
         throw std::invalid_argument("[" + s + "] outlier_prob must be in (0, 1)");
     if (!(model.minStd_rad > 0) || !(model.stdScale > 0))
         throw std::invalid_argument("[" + s + "] min_std_deg and std_scale must be > 0");
+    if (!(bearingWeight > 0 && bearingWeight <= 1))
+        throw std::invalid_argument("[" + s + "] bearing_weight must be in (0, 1]");
 }
 
 void CWiFiBearingMap::TLikelihoodOptions::dumpToTextStream(std::ostream& out) const
@@ -115,7 +118,7 @@ void CWiFiBearingMap::TLikelihoodOptions::dumpToTextStream(std::ostream& out) co
         << "\noutlier_prob = " << model.outlierProb
         << "\nmin_std_deg = " << mrpt::RAD2DEG(model.minStd_rad)
         << "\nmax_std_deg = " << mrpt::RAD2DEG(model.maxStd_rad)
-        << "\nstd_scale = " << model.stdScale << "\n";
+        << "\nstd_scale = " << model.stdScale << "\nbearing_weight = " << bearingWeight << "\n";
 }
 
 // ---------------------------------------------------------------- the map
@@ -175,8 +178,9 @@ double CWiFiBearingMap::internal_computeObservationLikelihood(
     }
     if (!inArea(takenFrom.x(), takenFrom.y())) return kOutsideAreaLogLikelihood;
     const mrpt::math::TPose2D robot(takenFrom.x(), takenFrom.y(), takenFrom.yaw());
-    return recordLogLikelihood(
-        recordFromObservation(o), robot, *tx, likelihoodOptions.model, likelihoodOptions.use);
+    return likelihoodOptions.bearingWeight * recordLogLikelihood(
+                                                 recordFromObservation(o), robot, *tx,
+                                                 likelihoodOptions.model, likelihoodOptions.use);
 }
 
 std::optional<bool> CWiFiBearingMap::agrees(
@@ -226,7 +230,7 @@ void CWiFiBearingMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
 // ---------------------------------------------------------------- serialization
 uint8_t CWiFiBearingMap::serializeGetVersion() const
 {
-    return 1;  // 1: the area
+    return 2;  // 1: the area; 2: the bearing weight
 }
 
 void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
@@ -238,6 +242,7 @@ void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
     out << genericMapParams;
     out << area_.has_value();
     if (area_) out << area_->min.x << area_->max.x << area_->min.y << area_->max.y;
+    out << likelihoodOptions.bearingWeight;
 }
 
 void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -246,6 +251,7 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
     {
         case 0:
         case 1:
+        case 2:
         {
             std::string yaml;
             // A map of thousands of transmitters is well below 64 MB of YAML.
@@ -264,6 +270,12 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
                 in >> b.min.x >> b.max.x >> b.min.y >> b.max.y;
                 area_ = b;
             }
+            likelihoodOptions.bearingWeight = 1.0;
+            if (version >= 2) in >> likelihoodOptions.bearingWeight;
+            if (!(likelihoodOptions.bearingWeight > 0 && likelihoodOptions.bearingWeight <= 1))
+                throw std::runtime_error(
+                    "serialized CWiFiBearingMap: bearing weight " +
+                    std::to_string(likelihoodOptions.bearingWeight) + " is outside (0, 1]");
         }
         break;
         default:

@@ -122,10 +122,18 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     pf_.m_options.loadFromConfigFile(ini, "PF_options");
 
     odoModel_ = odometryMotionModel(ini);
+    if (ini.sectionExists("OdometryMotion"))
+    {
+        odoMotion_.emplace();
+        odoMotion_->loadFromConfigFile(ini, "OdometryMotion");
+    }
 }
 
 void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
 {
+    // From the first reading on, odometry drives the filter: its bearing weight applies.
+    if (!lastOdo_ && odoMotion_)
+        wifiMap_->likelihoodOptions.bearingWeight *= odoMotion_->bearingWeight;
     lastOdo_ = odo.odometry;
     if (!odoAtLastStep_) odoAtLastStep_ = odo.odometry;
 }
@@ -159,11 +167,17 @@ bool LiveLocalizer::step()
     mrpt::obs::CActionRobotMovement2D act;
     if (lastOdo_ && odoAtLastStep_)
     {
-        // n offline steps would each have added the noise floor: sqrt(n) times it once.
-        auto model = odoModel_;
-        model.gaussianModel.minStdXY *= std::sqrt(double(n));
-        model.gaussianModel.minStdPHI *= std::sqrt(double(n));
-        act.computeFromOdometry(*lastOdo_ - *odoAtLastStep_, model);
+        const mrpt::poses::CPose2D increment = *lastOdo_ - *odoAtLastStep_;
+        if (odoMotion_)  // its spread depends on time and distance, not on the step count
+            act = *odoMotion_->makeAction(dt, increment);
+        else
+        {
+            // n offline steps would each have added the noise floor: sqrt(n) times it once.
+            auto model = odoModel_;
+            model.gaussianModel.minStdXY *= std::sqrt(double(n));
+            model.gaussianModel.minStdPHI *= std::sqrt(double(n));
+            act.computeFromOdometry(increment, model);
+        }
         odoAtLastStep_ = lastOdo_;
     }
     else

@@ -27,41 +27,68 @@ double UnknownMotion::stdPhi(double dt_s) const
         mrpt::DEG2RAD(maxTurnRate_dps) * std::sqrt(dt * correlationTime_s));
 }
 
-mrpt::obs::CActionRobotMovement2D::Ptr UnknownMotion::makeAction(
-    double dt_s, const mrpt::poses::CPose2D& increment) const
+namespace
 {
-    // The increment as odometry through MRPT's Gaussian model with all growth terms off: the
-    // σ floors become exactly the random walk's σ for this step.
+/** Gaussian step of mean `increment` (MRPT's model with all growth terms off: its σ floors are
+ *  exactly the given σ), or with `wideFraction > 0` the two-Gaussian mixture as weighted
+ *  samples, which MRPT's filter draws each particle's step from: 150 for the tight part and 50
+ *  for the wide one, weighted by their shares, fresh every step. Equal weights would give the
+ *  wide part a handful of distinct steps (2 % of the samples) for all the particles that take
+ *  it; and CPosePDFParticles::drawSingleSample walks the samples' cumulative weights, so each
+ *  particle's draw costs their number (1000 equal samples made a filter step 4.5x slower). */
+mrpt::obs::CActionRobotMovement2D::Ptr walkAction(
+    const mrpt::poses::CPose2D& increment, double stdXY, double stdPhi, double wideStdXY,
+    double wideStdPhi, double wideFraction)
+{
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions mm;
     mm.modelSelection = mrpt::obs::CActionRobotMovement2D::mmGaussian;
     mm.gaussianModel.a1 = mm.gaussianModel.a2 = 0;
     mm.gaussianModel.a3 = mm.gaussianModel.a4 = 0;
-    mm.gaussianModel.minStdXY = float(stdXY(dt_s));
-    mm.gaussianModel.minStdPHI = float(stdPhi(dt_s));
+    mm.gaussianModel.minStdXY = float(stdXY);
+    mm.gaussianModel.minStdPHI = float(stdPhi);
     auto a = mrpt::obs::CActionRobotMovement2D::Create();
+    // Also fills the action's raw odometry increment.
     a->computeFromOdometry(increment, mm);
-    if (wideFraction > 0)
+    if (wideFraction <= 0) return a;
+    const size_t nWide = 50, nTight = wideFraction < 1 ? 150 : 0;
+    auto pdf = mrpt::poses::CPosePDFParticles::Create(nTight + nWide);
+    auto& rng = mrpt::random::getRandomGenerator();
+    for (size_t i = 0; i < nTight + nWide; ++i)
     {
-        // The mixture as samples: MRPT's filter draws each particle's step from them.
-        UnknownMotion wide = *this;
-        wide.correlationTime_s = wideCorrelationTime_s;
-        const size_t nSamples = 1000;
-        auto pdf = mrpt::poses::CPosePDFParticles::Create(nSamples);
-        auto& rng = mrpt::random::getRandomGenerator();
-        for (size_t i = 0; i < nSamples; ++i)
-        {
-            const bool isWide = double(i) < wideFraction * double(nSamples);
-            const double sxy = isWide ? wide.stdXY(dt_s) : stdXY(dt_s);
-            const double sphi = isWide ? wide.stdPhi(dt_s) : stdPhi(dt_s);
-            auto& d = pdf->m_particles[i].d;
-            d.x = increment.x() + sxy * rng.drawGaussian1D_normalized();
-            d.y = increment.y() + sxy * rng.drawGaussian1D_normalized();
-            d.phi = mrpt::math::wrapToPi(increment.phi() + sphi * rng.drawGaussian1D_normalized());
-            pdf->m_particles[i].log_w = -std::log(double(nSamples));  // drawn by linear weight
-        }
-        a->poseChange = pdf;
+        const bool isWide = i >= nTight;
+        const double sxy = isWide ? wideStdXY : stdXY;
+        const double sphi = isWide ? wideStdPhi : stdPhi;
+        auto& d = pdf->m_particles[i].d;
+        d.x = increment.x() + sxy * rng.drawGaussian1D_normalized();
+        d.y = increment.y() + sxy * rng.drawGaussian1D_normalized();
+        d.phi = mrpt::math::wrapToPi(increment.phi() + sphi * rng.drawGaussian1D_normalized());
+        // drawSingleSample() reads linear weights.
+        pdf->m_particles[i].log_w = isWide ? std::log(wideFraction / double(nWide))
+                                           : std::log((1 - wideFraction) / double(nTight));
     }
+    a->poseChange = pdf;
     return a;
+}
+
+void requirePositive(double v, const std::string& what)
+{
+    if (!(v > 0) || !std::isfinite(v))
+        throw std::invalid_argument(what + " must be > 0 (got " + std::to_string(v) + ")");
+}
+void requireFraction(double v, const std::string& what)
+{
+    if (!(v >= 0 && v <= 1))
+        throw std::invalid_argument(what + " must be in [0, 1] (got " + std::to_string(v) + ")");
+}
+}  // namespace
+
+mrpt::obs::CActionRobotMovement2D::Ptr UnknownMotion::makeAction(
+    double dt_s, const mrpt::poses::CPose2D& increment) const
+{
+    UnknownMotion wide = *this;
+    wide.correlationTime_s = wideCorrelationTime_s;
+    return walkAction(
+        increment, stdXY(dt_s), stdPhi(dt_s), wide.stdXY(dt_s), wide.stdPhi(dt_s), wideFraction);
 }
 
 void UnknownMotion::loadFromConfigFile(
@@ -83,25 +110,16 @@ void UnknownMotion::loadFromConfigFile(
 
 void UnknownMotion::validate() const
 {
-    auto check = [](double v, const char* what)
-    {
-        if (!(v > 0) || !std::isfinite(v))
-            throw std::invalid_argument(
-                std::string("unknown-motion model: ") + what + " must be > 0 (got " +
-                std::to_string(v) + ")");
-    };
-    check(maxSpeed_mps, "max_speed_mps");
-    check(maxTurnRate_dps, "max_turn_rate_dps");
-    check(correlationTime_s, "correlation_time_s");
-    check(maxStep_s, "max_step_s");
-    check(minStdXY_m, "min_std_xy");
-    check(minStdPhi_deg, "min_std_phi_deg");
-    check(velocityWindow_s, "velocity_window_s");
-    check(wideCorrelationTime_s, "wide_correlation_time_s");
-    if (!(wideFraction >= 0 && wideFraction <= 1))
-        throw std::invalid_argument(
-            "unknown-motion model: wide_fraction must be in [0, 1] (got " +
-            std::to_string(wideFraction) + ")");
+    const std::string m = "unknown-motion model: ";
+    requirePositive(maxSpeed_mps, m + "max_speed_mps");
+    requirePositive(maxTurnRate_dps, m + "max_turn_rate_dps");
+    requirePositive(correlationTime_s, m + "correlation_time_s");
+    requirePositive(maxStep_s, m + "max_step_s");
+    requirePositive(minStdXY_m, m + "min_std_xy");
+    requirePositive(minStdPhi_deg, m + "min_std_phi_deg");
+    requirePositive(velocityWindow_s, m + "velocity_window_s");
+    requirePositive(wideCorrelationTime_s, m + "wide_correlation_time_s");
+    requireFraction(wideFraction, m + "wide_fraction");
 }
 
 std::string UnknownMotion::asString() const
@@ -115,6 +133,74 @@ std::string UnknownMotion::asString() const
           << (forwardOnly ? ", forward only" : "");
     if (wideFraction > 0)
         o << ", " << 100 * wideFraction << " % of steps with tau " << wideCorrelationTime_s << " s";
+    return o.str();
+}
+
+double OdometryMotion::stdXY(double dt_s, double distance_m) const
+{
+    const double dt = std::clamp(dt_s, 0.0, maxStep_s);
+    return std::sqrt(
+        stdXY_per_sqrt_m * stdXY_per_sqrt_m * std::abs(distance_m) +
+        stdXY_per_sqrt_s * stdXY_per_sqrt_s * dt);
+}
+
+double OdometryMotion::stdPhi(double dt_s, double distance_m) const
+{
+    const double dt = std::clamp(dt_s, 0.0, maxStep_s);
+    const double perM = mrpt::DEG2RAD(stdPhi_deg_per_sqrt_m);
+    const double perS = mrpt::DEG2RAD(stdPhi_deg_per_sqrt_s);
+    return std::sqrt(perM * perM * std::abs(distance_m) + perS * perS * dt);
+}
+
+mrpt::obs::CActionRobotMovement2D::Ptr OdometryMotion::makeAction(
+    double dt_s, const mrpt::poses::CPose2D& increment) const
+{
+    const double d = increment.norm();
+    // A zero σ would make MRPT's Gaussian singular (a zero step at dt = 0).
+    const double sxy = std::max(stdXY(dt_s, d), 1e-6);
+    const double sphi = std::max(stdPhi(dt_s, d), 1e-8);
+    return walkAction(increment, sxy, sphi, wideFactor * sxy, wideFactor * sphi, wideFraction);
+}
+
+void OdometryMotion::loadFromConfigFile(
+    const mrpt::config::CConfigFileBase& cfg, const std::string& s)
+{
+    stdXY_per_sqrt_m = cfg.read_double(s, "std_xy_per_sqrt_m", stdXY_per_sqrt_m);
+    stdPhi_deg_per_sqrt_m = cfg.read_double(s, "std_phi_deg_per_sqrt_m", stdPhi_deg_per_sqrt_m);
+    stdXY_per_sqrt_s = cfg.read_double(s, "std_xy_per_sqrt_s", stdXY_per_sqrt_s);
+    stdPhi_deg_per_sqrt_s = cfg.read_double(s, "std_phi_deg_per_sqrt_s", stdPhi_deg_per_sqrt_s);
+    maxStep_s = cfg.read_double(s, "max_step_s", maxStep_s);
+    wideFraction = cfg.read_double(s, "wide_fraction", wideFraction);
+    wideFactor = cfg.read_double(s, "wide_factor", wideFactor);
+    bearingWeight = cfg.read_double(s, "bearing_weight", bearingWeight);
+    validate();
+}
+
+void OdometryMotion::validate() const
+{
+    const std::string m = "odometry motion model: ";
+    requirePositive(stdXY_per_sqrt_m, m + "std_xy_per_sqrt_m");
+    requirePositive(stdPhi_deg_per_sqrt_m, m + "std_phi_deg_per_sqrt_m");
+    requirePositive(stdXY_per_sqrt_s, m + "std_xy_per_sqrt_s");
+    requirePositive(stdPhi_deg_per_sqrt_s, m + "std_phi_deg_per_sqrt_s");
+    requirePositive(maxStep_s, m + "max_step_s");
+    requirePositive(wideFactor, m + "wide_factor");
+    requireFraction(wideFraction, m + "wide_fraction");
+    requirePositive(bearingWeight, m + "bearing_weight");
+    if (bearingWeight > 1)
+        throw std::invalid_argument(
+            m + "bearing_weight must be in (0, 1] (got " + std::to_string(bearingWeight) + ")");
+}
+
+std::string OdometryMotion::asString() const
+{
+    std::ostringstream o;
+    o << "odometry + random walk of " << stdXY_per_sqrt_m << " m/sqrt(m), " << stdPhi_deg_per_sqrt_m
+      << " deg/sqrt(m), " << stdXY_per_sqrt_s << " m/sqrt(s), " << stdPhi_deg_per_sqrt_s
+      << " deg/sqrt(s)";
+    if (wideFraction > 0)
+        o << ", " << 100 * wideFraction << " % of steps " << wideFactor << "x wider";
+    if (bearingWeight != 1) o << ", bearings weighted " << bearingWeight;
     return o.str();
 }
 

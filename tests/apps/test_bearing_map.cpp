@@ -306,6 +306,51 @@ TEST(BearingMapArea, PosesOutsideTheAreaLoseTheirWeightAndTheAreaIsSaved)
     }
 }
 
+TEST(BearingMapWeight, TempersEachBearingAndIsSavedWithTheMap)
+{
+    const auto aps = writeTemp("weight_aps.yaml", kApsYaml);
+    const std::string sect = "[MetricMap_wifiBearingMap_00_likelihoodOpts]\n";
+    auto full = mapFromIni(iniFor(aps)).mapByClass<CWiFiBearingMap>();
+    auto tempered =
+        mapFromIni(iniFor(aps) + sect + "bearing_weight = 0.3\n").mapByClass<CWiFiBearingMap>();
+    ASSERT_TRUE(full && tempered);
+    EXPECT_EQ(full->likelihoodOptions.bearingWeight, 1.0);
+    EXPECT_EQ(tempered->likelihoodOptions.bearingWeight, 0.3);
+    const auto& ap = full->transmitters().at(0);
+    BearingRecord r;
+    r.t = 1, r.transmitter = ap.mac, r.hasAoa = true, r.aoaStd = 0.05;
+    const mrpt::math::TPose2D robot(4, 2, 0.3);
+    r.aoa = predictAoa(sensorWorldPose(robot, r.sensorPose), ap.pose.x, ap.pose.y) + 0.1;
+    const auto obs = observationFromRecord(r);
+    for (const double yaw : {0.3, 1.0, 2.5})
+    {
+        const mrpt::poses::CPose3D p(robot.x, robot.y, 0, yaw, 0, 0);
+        EXPECT_NEAR(
+            tempered->computeObservationLikelihood(*obs, p),
+            0.3 * full->computeObservationLikelihood(*obs, p), 1e-12);
+    }
+
+    mrpt::io::CMemoryStream buf;
+    mrpt::serialization::archiveFrom(buf) << *tempered;
+    buf.Seek(0);
+    CWiFiBearingMap back;
+    mrpt::serialization::archiveFrom(buf) >> back;
+    EXPECT_EQ(back.likelihoodOptions.bearingWeight, 0.3);
+
+    for (const std::string bad : {"bearing_weight = 0\n", "bearing_weight = 1.5\n"})
+    {
+        try
+        {
+            mapFromIni(iniFor(aps) + sect + bad);
+            ADD_FAILURE() << "accepted " << bad;
+        }
+        catch (const std::exception& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("bearing_weight"), std::string::npos) << e.what();
+        }
+    }
+}
+
 TEST(ParticleRecovery, ReseedsOnlyWhileMostBearingsDisagreeWithTheEstimate)
 {
     CWiFiBearingMap map;

@@ -359,18 +359,14 @@ TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
     ASSERT_EQ(sim.exitCode, 0) << sim.output;
 
     // Offline: csi-bearings (AoD, as wifi-localize's own chain in the .ini) and
-    // wifi-pf-localization, bearings only (the capture has no odometry either).
+    // wifi-pf-localization, bearings only (the capture has no odometry either): both filters
+    // use the .ini's [UnknownMotion].
     const auto bearings = test::run(
         test::binDir() + "/csi-bearings " + tmp.file("sim.rawlog") + " " + tmp.file("b.rawlog") +
         " --algo aod --tx-array " + kShare + "/arrays/ap-linear-4.yaml --calib " + apCalibration() +
         " --csv " + tmp.file("b.csv") + " -q");
     ASSERT_EQ(bearings.exitCode, 0) << bearings.output;
     std::filesystem::remove(tmp.file("sim.rawlog"));
-    {
-        // The bearings as CSV, odometry "standing still": the filter sees only its noise floor.
-        std::ofstream(tmp.file("still.txt")) << "0 0 0 0 0 0 0 1\n"
-                                             << std::to_string(2e9) << " 0 0 0 0 0 0 1\n";
-    }
     const auto offIni = tmp.file("off.ini");
     {
         std::istringstream in(test::readFile(kShare + "/localization/pf-localization-wifi.ini"));
@@ -380,9 +376,8 @@ TEST(WifiLocalize, ReplayingACaptureGivesTheOfflineEstimate)
     }
     const auto off = test::run(
         test::binDir() + "/wifi-pf-localization " + offIni + " -m " + kShare +
-        "/localization/kidnapped-aps.yaml -b " + tmp.file("b.csv") + " --odometry-tum " +
-        tmp.file("still.txt") + " --sensor-pose 0.1 0 0.4 0 0 0 -n 1500 -q --no-plots -o " +
-        tmp.file("off"));
+        "/localization/kidnapped-aps.yaml -b " + tmp.file("b.csv") +
+        " --sensor-pose 0.1 0 0.4 0 0 0 -n 1500 -q --no-plots -o " + tmp.file("off"));
     ASSERT_EQ(off.exitCode, 0) << off.output;
 
     // Live: the capture replayed by CWiFiCSISensor (source = pcap) inside wifi-localize.

@@ -41,6 +41,7 @@ namespace mrpt_wifi
  * min_std_deg = 2
  * std_scale = 1.0
  * max_std_deg = 45
+ * bearing_weight = 1   ; (0, 1]: tempers each bearing's log-likelihood (see bearingWeight)
  * \endcode
  * The map is read-only: inserting observations does nothing (it is built from the file).
  *
@@ -60,6 +61,13 @@ public:
     {
         localization::RobustBearingModel model;
         localization::BearingUse use;
+        /** `bearing_weight` in (0, 1]: each bearing's log-likelihood is multiplied by it (a
+         *  tempered likelihood). Bearings taken a fraction of a second apart err alike (the
+         *  multipath at that spot), so counting each as independent evidence makes the filter
+         *  sure of a pose long before the robot has moved far enough to average the multipath
+         *  out: its particles collapse onto the first pose that fits and cannot leave. 1: each
+         *  bearing counts fully (MRPT's usual product of likelihoods). */
+        double bearingWeight = 1.0;
         void loadFromConfigFile(
             const mrpt::config::CConfigFileBase& source, const std::string& section) override;
         void dumpToTextStream(std::ostream& out) const override;

@@ -46,7 +46,8 @@ struct LiveLocalizerOptions
     /** `max_bearings_per_step`: observations per filter step (sensory frame); 0 (default):
      *  all that are queued. 1 is what the offline wifi-pf-localization does (one step per
      *  bearing); a step of n bearings applies the odometry noise floor × sqrt(n), the spread n
-     *  single steps would have added, so batching changes the cost, not the model. */
+     *  single steps would have added, so batching changes the cost, not the model (with an
+     *  `[OdometryMotion]` section the spread depends on time and distance alone). */
     size_t maxBearingsPerStep = 0;
 
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
@@ -59,8 +60,9 @@ struct LiveLocalizerOptions
  *  ([LocalizationExperiment] particles_count and init_PDF_* (mode 1), [PF_options],
  *  [KLD_options], [DummyOdometryParams], [MetricMap]). Odometry readings accumulate; each
  *  step() takes the bearings queued since the last one (up to max_bearings_per_step) as one
- *  sensory frame, with the odometry increment since the last step as the action (Gaussian
- *  model with the DummyOdometryParams floor, as MRPT's app does), or, while no odometry has been
+ *  sensory frame, with the odometry increment since the last step as the action (the
+ *  `[OdometryMotion]` model if the file has that section, else MRPT's Gaussian model with the
+ *  DummyOdometryParams floor, as MRPT's app does), or, while no odometry has been
  *  seen, the `[UnknownMotion]` model around the constant-velocity prediction from this filter's
  *  own estimates; either way `[ParticleRecovery]` re-seeds particles while the bearings disagree
  *  with the estimate: the same models as wifi-pf-localization. The map's area is the init_PDF
@@ -105,6 +107,7 @@ private:
     mrpt::slam::CMonteCarloLocalization2D pdf_;
     mrpt::bayes::CParticleFilter pf_;
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
+    std::optional<OdometryMotion> odoMotion_;  //!< [OdometryMotion], if the .ini has one
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     std::vector<CObservationWiFiBearing::Ptr> pending_;
     UnknownMotion motion_;

@@ -62,8 +62,9 @@ struct UnknownMotion
 
     /** The filter action for a step of `dt_s` seconds: mean `increment` (robot frame; zero for
      *  the pure random walk), the σ above (mmGaussian). With `wideFraction > 0` its poseChange
-     *  is the mixture as 1000 equally weighted samples (CPosePDFParticles, which MRPT's filter
-     *  draws each particle's step from); they come from MRPT's global random generator. */
+     *  is the mixture as weighted samples (CPosePDFParticles: 150 tight, 50 wide, weighted by
+     *  their shares; MRPT's filter draws each particle's step from them); they come from MRPT's
+     *  global random generator. */
     mrpt::obs::CActionRobotMovement2D::Ptr makeAction(
         double dt_s, const mrpt::poses::CPose2D& increment = {}) const;
 
@@ -74,6 +75,61 @@ struct UnknownMotion
      *  Throws std::invalid_argument on non-positive speeds or times. */
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
     /** Throws std::invalid_argument naming the bad field. */
+    void validate() const;
+    std::string asString() const;
+};
+
+/** Motion model for a robot with odometry: the odometry increment plus a heavy-tailed random
+ *  walk whose spread grows with the distance driven and with time, not with the number of
+ *  filter steps.
+ *
+ *  MRPT's Gaussian odometry model adds its σ floors (`[DummyOdometryParams]`) once per filter
+ *  step: at 150 bearings/s that is a walk of 6°/√s in heading, so the filter all but ignores the
+ *  odometry and follows the bearings wherever multipath biases them (and a live filter, taking
+ *  several bearings per step, gets another model than the offline one). Here a step over `dt`
+ *  seconds and `d` metres driven has, per axis,
+ *  \f[ \sigma_{xy}^2 = q_{xy,m}^2\,d + q_{xy,s}^2\,dt, \qquad
+ *      \sigma_\phi^2 = q_{\phi,m}^2\,d + q_{\phi,s}^2\,dt \f]
+ *  (random walks per metre and per second: the odometry's slip and drift), the same however the
+ *  bearings cut the drive into steps. A `wideFraction` of the particles takes `wideFactor` times
+ *  that σ: a filter that settled on a slightly wrong pose (most often the heading, after a turn
+ *  whose bearings multipath bent) keeps particles that explore, and the bearings pick them,
+ *  while the tight part follows the odometry closely.
+ *
+ *  Read from the `.ini`'s `[OdometryMotion]` section by wifi-pf-localization and wifi-localize;
+ *  without that section both use MRPT's model as pf-localization does. */
+struct OdometryMotion
+{
+    double stdXY_per_sqrt_m = 0.03;      //!< q_xy,m [m/√m]
+    double stdPhi_deg_per_sqrt_m = 1.0;  //!< q_φ,m [deg/√m]
+    double stdXY_per_sqrt_s = 0.02;      //!< q_xy,s [m/√s]
+    double stdPhi_deg_per_sqrt_s = 0.5;  //!< q_φ,s [deg/√s]
+    double maxStep_s = 2.0;              //!< dt is capped at this [s]
+    double wideFraction = 0.02;          //!< share of the particles taking the wide walk
+    double wideFactor = 30.0;            //!< its σ, as a multiple of the tight part's
+    /** In (0, 1]: while odometry drives the filter, each bearing's log-likelihood is multiplied
+     *  by this (on top of the map's CWiFiBearingMap bearing_weight). With the odometry carrying
+     *  the particles between spots, bearings from one spot, which err alike, need not count as
+     *  independent evidence; without odometry the bearings alone hold the cloud together and
+     *  tempering them loosened it (development rooms), hence here and not in the map. */
+    double bearingWeight = 1.0;
+
+    /** σ of the position change per axis [m] and of the heading change [rad] for a step of
+     *  `dt_s` seconds and `distance_m` metres driven (the tight part). */
+    double stdXY(double dt_s, double distance_m) const;
+    double stdPhi(double dt_s, double distance_m) const;
+
+    /** The filter action for the odometry `increment` (robot frame) over `dt_s` seconds: a
+     *  Gaussian (mmGaussian with the σ above), or with `wideFraction > 0` the mixture as
+     *  weighted samples as UnknownMotion::makeAction's, drawn from MRPT's global generator. */
+    mrpt::obs::CActionRobotMovement2D::Ptr makeAction(
+        double dt_s, const mrpt::poses::CPose2D& increment) const;
+
+    /** Reads `std_xy_per_sqrt_m`, `std_phi_deg_per_sqrt_m`, `std_xy_per_sqrt_s`,
+     *  `std_phi_deg_per_sqrt_s`, `max_step_s`, `wide_fraction`, `wide_factor`,
+     *  `bearing_weight` from `section`
+     *  (missing keys keep their value). Throws std::invalid_argument naming a bad value. */
+    void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
     void validate() const;
     std::string asString() const;
 };
