@@ -337,11 +337,15 @@ TEST(BearingMapWeight, TempersEachBearingAndIsSavedWithTheMap)
     mrpt::serialization::archiveFrom(buf) >> back;
     EXPECT_EQ(back.likelihoodOptions.bearingWeight, 0.3);
 
+    // (Read through the options: MRPT's TSetOfMetricMapInitializers leaks the map definition
+    // when its loading throws, which the sanitizer build reports.)
     for (const std::string bad : {"bearing_weight = 0\n", "bearing_weight = 1.5\n"})
     {
         try
         {
-            mapFromIni(iniFor(aps) + sect + bad);
+            mrpt::config::CConfigFileMemory cfg(sect + bad);
+            CWiFiBearingMap::TLikelihoodOptions o;
+            o.loadFromConfigFile(cfg, "MetricMap_wifiBearingMap_00_likelihoodOpts");
             ADD_FAILURE() << "accepted " << bad;
         }
         catch (const std::exception& e)
