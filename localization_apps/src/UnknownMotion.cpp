@@ -187,9 +187,7 @@ void OdometryMotion::validate() const
     requirePositive(wideFactor, m + "wide_factor");
     requireFraction(wideFraction, m + "wide_fraction");
     requirePositive(bearingWeight, m + "bearing_weight");
-    if (bearingWeight > 1)
-        throw std::invalid_argument(
-            m + "bearing_weight must be in (0, 1] (got " + std::to_string(bearingWeight) + ")");
+    requireFraction(bearingWeight, m + "bearing_weight");
 }
 
 std::string OdometryMotion::asString() const
