@@ -75,6 +75,11 @@ void requirePositive(double v, const std::string& what)
     if (!(v > 0) || !std::isfinite(v))
         throw std::invalid_argument(what + " must be > 0 (got " + std::to_string(v) + ")");
 }
+void requireNonNegative(double v, const std::string& what)
+{
+    if (!(v >= 0) || !std::isfinite(v))
+        throw std::invalid_argument(what + " must be >= 0 (got " + std::to_string(v) + ")");
+}
 void requireFraction(double v, const std::string& what)
 {
     if (!(v >= 0 && v <= 1))
@@ -159,7 +164,10 @@ mrpt::obs::CActionRobotMovement2D::Ptr OdometryMotion::makeAction(
     // A zero σ would make MRPT's Gaussian singular (a zero step at dt = 0).
     const double sxy = std::max(stdXY(dt_s, d), 1e-6);
     const double sphi = std::max(stdPhi(dt_s, d), 1e-8);
-    return walkAction(increment, sxy, sphi, wideFactor * sxy, wideFactor * sphi, wideFraction);
+    const double jumpShare = 1.0 - std::exp(-jumpRate_hz * std::clamp(dt_s, 0.0, maxStep_s));
+    return walkAction(
+        increment, sxy, sphi, std::hypot(sxy, jumpStdXY_m),
+        std::hypot(sphi, mrpt::DEG2RAD(jumpStdPhi_deg)), jumpShare);
 }
 
 void OdometryMotion::loadFromConfigFile(
@@ -170,8 +178,9 @@ void OdometryMotion::loadFromConfigFile(
     stdXY_per_sqrt_s = cfg.read_double(s, "std_xy_per_sqrt_s", stdXY_per_sqrt_s);
     stdPhi_deg_per_sqrt_s = cfg.read_double(s, "std_phi_deg_per_sqrt_s", stdPhi_deg_per_sqrt_s);
     maxStep_s = cfg.read_double(s, "max_step_s", maxStep_s);
-    wideFraction = cfg.read_double(s, "wide_fraction", wideFraction);
-    wideFactor = cfg.read_double(s, "wide_factor", wideFactor);
+    jumpRate_hz = cfg.read_double(s, "jump_rate_hz", jumpRate_hz);
+    jumpStdXY_m = cfg.read_double(s, "jump_std_xy_m", jumpStdXY_m);
+    jumpStdPhi_deg = cfg.read_double(s, "jump_std_phi_deg", jumpStdPhi_deg);
     bearingWeight = cfg.read_double(s, "bearing_weight", bearingWeight);
     validate();
 }
@@ -184,8 +193,9 @@ void OdometryMotion::validate() const
     requirePositive(stdXY_per_sqrt_s, m + "std_xy_per_sqrt_s");
     requirePositive(stdPhi_deg_per_sqrt_s, m + "std_phi_deg_per_sqrt_s");
     requirePositive(maxStep_s, m + "max_step_s");
-    requirePositive(wideFactor, m + "wide_factor");
-    requireFraction(wideFraction, m + "wide_fraction");
+    requireNonNegative(jumpRate_hz, m + "jump_rate_hz");
+    requireNonNegative(jumpStdXY_m, m + "jump_std_xy_m");
+    requireNonNegative(jumpStdPhi_deg, m + "jump_std_phi_deg");
     requirePositive(bearingWeight, m + "bearing_weight");
     requireFraction(bearingWeight, m + "bearing_weight");
 }
@@ -196,8 +206,9 @@ std::string OdometryMotion::asString() const
     o << "odometry + random walk of " << stdXY_per_sqrt_m << " m/sqrt(m), " << stdPhi_deg_per_sqrt_m
       << " deg/sqrt(m), " << stdXY_per_sqrt_s << " m/sqrt(s), " << stdPhi_deg_per_sqrt_s
       << " deg/sqrt(s)";
-    if (wideFraction > 0)
-        o << ", " << 100 * wideFraction << " % of steps " << wideFactor << "x wider";
+    if (jumpRate_hz > 0)
+        o << ", jumps of " << jumpStdXY_m << " m, " << jumpStdPhi_deg << " deg at " << jumpRate_hz
+          << "/s";
     if (bearingWeight != 1) o << ", bearings weighted " << bearingWeight;
     return o.str();
 }

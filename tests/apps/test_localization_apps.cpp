@@ -272,9 +272,9 @@ TEST(LocalizationAppsPf, FindsTheRobotAgainAfterAKidnappingMidRun)
     // Issue 19.2: a filter that has converged and then loses the robot must recover when the
     // bearings disagree with its estimate ([ParticleRecovery] re-seeds particles over the map's
     // area), with and without odometry; and it never leaves the room. Without recovery
-    // (rate_hz = 0) and without the motion models' wide tails (wide_fraction = 0; the tail of
-    // the shipped [OdometryMotion] alone also finds the robot again, partly) the run with
-    // odometry stays lost (5.0 m): the test can fail.
+    // (rate_hz = 0) and without the motion models' heavy tails (wide_fraction = 0,
+    // jump_rate_hz = 0; the jumps of the shipped [OdometryMotion] alone also find the robot
+    // again, partly) the run with odometry stays lost (5.0 m): the test can fail.
     const mrpt_wifi::test::TempDir tmp;
     const std::string dir = kidnappedMidRun(tmp.path().string() + "/in");
     const std::string noRecovery = tmp.path().string() + "/no-recovery.ini";
@@ -284,6 +284,7 @@ TEST(LocalizationAppsPf, FindsTheRobotAgainAfterAKidnappingMidRun)
         for (std::string l; std::getline(in, l);)
             out << (l.rfind("rate_hz", 0) == 0         ? "rate_hz = 0"
                     : l.rfind("wide_fraction", 0) == 0 ? "wide_fraction = 0"
+                    : l.rfind("jump_rate_hz", 0) == 0  ? "jump_rate_hz = 0"
                                                        : l)
                 << "\n";
     }
@@ -315,7 +316,7 @@ TEST(LocalizationAppsPf, FindsTheRobotAgainAfterAKidnappingMidRun)
                   << " m)\n";
         EXPECT_LT(before, 0.3) << withRecovery.out;
         EXPECT_LT(after, 0.3) << withRecovery.out;
-        // With odometry and no wide tail nothing else moves the particles that far.
+        // With odometry and no jumps nothing else moves the particles that far.
         if (motion.rfind("--odometry-tum", 0) == 0)
         {
             EXPECT_GT(afterNo, 1.0) << without.out;

@@ -308,7 +308,7 @@ TEST(OdometryMotion, SpreadGrowsWithTimeAndDistanceNotWithTheStepCount)
     // 6 deg/sqrt(s) that drowns the odometry. This model's variance is linear in the time and
     // in the distance of a step, so a drive cut into ten steps spreads as much as in one.
     OdometryMotion m;
-    m.wideFraction = 0;
+    m.jumpRate_hz = 0;
     m.stdXY_per_sqrt_m = 0.03, m.stdPhi_deg_per_sqrt_m = 1.0;
     m.stdXY_per_sqrt_s = 0.02, m.stdPhi_deg_per_sqrt_s = 0.5;
     const mrpt::poses::CPose2D oneStep(0.3, 0, 0), tenthStep(0.03, 0, 0);
@@ -331,37 +331,53 @@ TEST(OdometryMotion, SpreadGrowsWithTimeAndDistanceNotWithTheStepCount)
     EXPECT_NEAR(m.stdXY(1.0, 0), 0.02, 1e-12);
     EXPECT_NO_THROW(m.makeAction(0, {}));
 
-    // Heavy-tailed: a tenth of the particles take steps ten times wider.
-    m.wideFraction = 0.1, m.wideFactor = 10;
+    // Heavy-tailed: jumps at a rate per second, so in a step of 0.5 s a tenth of the particles
+    // jump (1 - exp(-rate * dt)), here by ten times the step's own sigma.
+    const double sigma = std::sqrt(varXY);
+    m.jumpRate_hz = -std::log(0.9) / 0.5, m.jumpStdXY_m = std::sqrt(99.0) * sigma;
+    m.jumpStdPhi_deg = 0;
     mrpt::random::getRandomGenerator().randomize(3);
     const auto w = m.makeAction(0.5, oneStep);
     const auto* pdf = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(w->poseChange.get());
     ASSERT_NE(pdf, nullptr);
-    const double sigma = std::sqrt(varXY);
-    size_t far = 0;
-    const size_t n = 20000;
-    for (size_t i = 0; i < n; ++i)
+    const auto farShare = [&](const mrpt::poses::CPosePDFParticles& p, double mean, double bound)
     {
-        mrpt::poses::CPose2D d;
-        pdf->drawSingleSample(d);
-        if (std::abs(d.x() - 0.3) > 4 * sigma) ++far;
-    }
-    // Beyond 4 sigma: ~0 of the tight part, 69 % of the wide one (beyond 0.4 of its sigma), so
-    // ~6.9 % of all (50 wide samples: +-0.6 % at 1 sigma).
-    EXPECT_GT(double(far) / n, 0.035);
-    EXPECT_LT(double(far) / n, 0.10);
+        size_t far = 0;
+        const size_t n = 20000;
+        for (size_t i = 0; i < n; ++i)
+        {
+            mrpt::poses::CPose2D d;
+            p.drawSingleSample(d);
+            if (std::abs(d.x() - mean) > bound) ++far;
+        }
+        return double(far) / n;
+    };
+    // Beyond 4 sigma: ~0 of the tight part, 69 % of the jumps (beyond 0.4 of their sigma), so
+    // ~6.9 % of all (50 jump samples: +-0.6 % at 1 sigma).
+    EXPECT_GT(farShare(*pdf, 0.3, 4 * sigma), 0.035);
+    EXPECT_LT(farShare(*pdf, 0.3, 4 * sigma), 0.10);
+    // A tenth of the time, a tenth of the jumps (per time, not per step): ten steps of 0.05 s
+    // jump as often in all as the one of 0.5 s.
+    const auto w10 = m.makeAction(0.05, tenthStep);
+    const auto* pdf10 = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(w10->poseChange.get());
+    ASSERT_NE(pdf10, nullptr);
+    const double sigma10 = m.stdXY(0.05, 0.03);
+    const double share10 = farShare(*pdf10, 0.03, 6 * sigma10);  // jumps are ~31 sigma10 wide
+    EXPECT_NEAR(share10, 0.0105 * 0.85, 0.004);
 
     // Read from the .ini; bad values name the key.
     mrpt::config::CConfigFileMemory ini(
-        "[OdometryMotion]\nstd_xy_per_sqrt_m = 0.05\nwide_fraction = 0.03\nwide_factor = 5\n"
-        "bearing_weight = 0.3\n");
+        "[OdometryMotion]\nstd_xy_per_sqrt_m = 0.05\njump_rate_hz = 0.25\njump_std_xy_m = 0.2\n"
+        "jump_std_phi_deg = 4\nbearing_weight = 0.3\n");
     OdometryMotion r;
     r.loadFromConfigFile(ini, "OdometryMotion");
     EXPECT_EQ(r.stdXY_per_sqrt_m, 0.05);
-    EXPECT_EQ(r.wideFraction, 0.03);
-    EXPECT_EQ(r.wideFactor, 5);
+    EXPECT_EQ(r.jumpRate_hz, 0.25);
+    EXPECT_EQ(r.jumpStdXY_m, 0.2);
+    EXPECT_EQ(r.jumpStdPhi_deg, 4);
     EXPECT_EQ(r.bearingWeight, 0.3);
-    for (const std::string key : {"std_phi_deg_per_sqrt_s = -1", "bearing_weight = 1.5"})
+    for (const std::string key :
+         {"std_phi_deg_per_sqrt_s = -1", "bearing_weight = 1.5", "jump_rate_hz = -0.1"})
     {
         mrpt::config::CConfigFileMemory bad("[OdometryMotion]\n" + key + "\n");
         try

@@ -91,10 +91,16 @@ struct UnknownMotion
  *  \f[ \sigma_{xy}^2 = q_{xy,m}^2\,d + q_{xy,s}^2\,dt, \qquad
  *      \sigma_\phi^2 = q_{\phi,m}^2\,d + q_{\phi,s}^2\,dt \f]
  *  (random walks per metre and per second: the odometry's slip and drift), the same however the
- *  bearings cut the drive into steps. A `wideFraction` of the particles takes `wideFactor` times
- *  that σ: a filter that settled on a slightly wrong pose (most often the heading, after a turn
- *  whose bearings multipath bent) keeps particles that explore, and the bearings pick them,
- *  while the tight part follows the odometry closely.
+ *  bearings cut the drive into steps. On top of it, jumps (a compound Poisson process): at
+ *  `jumpRate_hz` per second a particle's pose jumps by a Gaussian of `jumpStdXY_m` and
+ *  `jumpStdPhi_deg`, so in a step of dt the share 1 − exp(−rate·dt) of the particles jumps: a
+ *  filter that settled on a slightly wrong pose (most often the heading, after a turn whose
+ *  bearings multipath bent) keeps particles that explore, and the bearings pick them, while the
+ *  rest follows the odometry closely. Per time, not per step: a share of every step (2 % taking
+ *  30× the step's σ, before) made the walk √(0.98 + 0.02·30²) = 4.4 times as wide as the tight
+ *  one, its shape depend on how the bearings cut the drive into steps (offline one per bearing,
+ *  live several), and let a filter in a room with weak geometry (two of three APs side by side)
+ *  turn 15-20° away from its odometry.
  *
  *  Read from the `.ini`'s `[OdometryMotion]` section by wifi-pf-localization and wifi-localize;
  *  without that section both use MRPT's model as pf-localization does. */
@@ -105,8 +111,9 @@ struct OdometryMotion
     double stdXY_per_sqrt_s = 0.02;      //!< q_xy,s [m/√s]
     double stdPhi_deg_per_sqrt_s = 0.5;  //!< q_φ,s [deg/√s]
     double maxStep_s = 2.0;              //!< dt is capped at this [s]
-    double wideFraction = 0.02;          //!< share of the particles taking the wide walk
-    double wideFactor = 30.0;            //!< its σ, as a multiple of the tight part's
+    double jumpRate_hz = 0.5;            //!< jumps per particle and second
+    double jumpStdXY_m = 0.1;            //!< σ of a jump per axis [m]
+    double jumpStdPhi_deg = 3.0;         //!< σ of a jump in heading [deg]
     /** In (0, 1]: while odometry drives the filter, each bearing's log-likelihood is multiplied
      *  by this (on top of the map's CWiFiBearingMap bearing_weight). With the odometry carrying
      *  the particles between spots, bearings from one spot, which err alike, need not count as
@@ -120,15 +127,16 @@ struct OdometryMotion
     double stdPhi(double dt_s, double distance_m) const;
 
     /** The filter action for the odometry `increment` (robot frame) over `dt_s` seconds: a
-     *  Gaussian (mmGaussian with the σ above), or with `wideFraction > 0` the mixture as
-     *  weighted samples as UnknownMotion::makeAction's, drawn from MRPT's global generator. */
+     *  Gaussian (mmGaussian with the σ above), or with jumps the mixture (the share
+     *  1 − exp(−rate·dt) with the jump added) as weighted samples as UnknownMotion::makeAction's,
+     *  drawn from MRPT's global generator. */
     mrpt::obs::CActionRobotMovement2D::Ptr makeAction(
         double dt_s, const mrpt::poses::CPose2D& increment) const;
 
     /** Reads `std_xy_per_sqrt_m`, `std_phi_deg_per_sqrt_m`, `std_xy_per_sqrt_s`,
-     *  `std_phi_deg_per_sqrt_s`, `max_step_s`, `wide_fraction`, `wide_factor`,
-     *  `bearing_weight` from `section`
-     *  (missing keys keep their value). Throws std::invalid_argument naming a bad value. */
+     *  `std_phi_deg_per_sqrt_s`, `max_step_s`, `jump_rate_hz`, `jump_std_xy_m`,
+     *  `jump_std_phi_deg`, `bearing_weight` from `section` (missing keys keep their value).
+     *  Throws std::invalid_argument naming a bad value. */
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
     void validate() const;
     std::string asString() const;

@@ -1,0 +1,155 @@
+#!/usr/bin/env python3
+"""Re-runs the kidnapped-robot filter of localization-accuracy's rooms with .ini changes.
+
+  python3 scripts/pf_rooms.py BUILD_DIR SWEEP_WORK OUT_DIR odometry|none [--seeds 1,2,3]
+                              [--rooms 1,2] [--jobs 2] [Section/key=value ...]
+
+SWEEP_WORK is a `localization-accuracy -w DIR` folder (its room-N/pf.ini and the recorded
+kidnapped/ bearings, odometry and true poses). Each room and filter seed runs
+wifi-pf-localization offline, 3000 particles, with the room's pf.ini changed as given; the
+figure is the sweep's: median error of the PF mean against the true poses after convergence
+(error < 1 m for 5 s; never: infinite). Prints each room's runs and median, then the runs within
+0.3 m, the runs that never converged and the rooms whose median is within 0.3 m.
+"""
+import argparse
+import bisect
+import concurrent.futures
+import math
+import os
+import re
+import statistics
+import subprocess
+import sys
+
+
+def derive_ini(src, dst, overrides):
+    """Copy of src with [Section] key = value set (replaced, or added to its section)."""
+    wanted = {}
+    for o in overrides:
+        key, value = o.split("=", 1)
+        section, name = key.split("/", 1)
+        wanted.setdefault(section, {})[name] = value
+    out, done, section = [], set(), None
+
+    def flush(sec):
+        for name, value in wanted.get(sec, {}).items():
+            if (sec, name) not in done:
+                out.append(f"{name} = {value}")
+                done.add((sec, name))
+
+    for line in open(src).read().splitlines():
+        m = re.match(r"\s*\[(.+)\]", line)
+        if m:
+            flush(section)
+            section = m.group(1)
+        else:
+            m = re.match(r"\s*([^;=\s]+)\s*=", line)
+            if m and m.group(1) in wanted.get(section, {}):
+                line = f"{m.group(1)} = {wanted[section][m.group(1)]}"
+                done.add((section, m.group(1)))
+        out.append(line)
+    flush(section)
+    for sec in wanted:
+        if not any((sec, n) in done for n in wanted[sec]):
+            out.append(f"[{sec}]")
+            flush(sec)
+    open(dst, "w").write("\n".join(out) + "\n")
+
+
+def read_tum(path):
+    times, xy = [], []
+    for line in open(path):
+        if line.startswith("#") or not line.strip():
+            continue
+        v = [float(x) for x in line.split()]
+        times.append(v[0])
+        xy.append((v[1], v[2]))
+    return times, xy
+
+
+def median_after_convergence(estimate, truth, threshold_m=1.0, hold_s=5.0):
+    tt, txy = truth
+    times, errors = [], []
+    for t, (x, y) in zip(*estimate):
+        i = bisect.bisect_left(tt, t)
+        if i <= 0 or i >= len(tt):
+            continue
+        a = (t - tt[i - 1]) / (tt[i] - tt[i - 1])
+        gx = txy[i - 1][0] + a * (txy[i][0] - txy[i - 1][0])
+        gy = txy[i - 1][1] + a * (txy[i][1] - txy[i - 1][1])
+        times.append(t)
+        errors.append(math.hypot(x - gx, y - gy))
+    run = 0
+    for i, e in enumerate(errors):
+        if e >= threshold_m:
+            run = i + 1
+        elif times[i] - times[run] >= hold_s:
+            return statistics.median(errors[run:])
+    return math.inf
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p.add_argument("build")
+    p.add_argument("work")
+    p.add_argument("out")
+    p.add_argument("motion", choices=["odometry", "none"])
+    p.add_argument("--seeds", default="1,2,3")
+    p.add_argument("--rooms", default="")
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("overrides", nargs="*", help="Section/key=value")
+    a = p.parse_args()
+    rooms = sorted((d for d in os.listdir(a.work) if re.fullmatch(r"room-\d+", d)),
+                   key=lambda d: int(d[5:]))
+    if a.rooms:
+        rooms = [r for r in rooms if r[5:] in a.rooms.split(",")]
+    seeds = [int(s) for s in a.seeds.split(",")]
+    os.makedirs(a.out, exist_ok=True)
+
+    def run(room, seed):
+        src = os.path.join(a.work, room)
+        out = os.path.join(a.out, f"{room}-seed{seed}")
+        os.makedirs(out, exist_ok=True)
+        ini = os.path.join(out, "pf.ini")
+        derive_ini(os.path.join(src, "pf.ini"), ini, a.overrides)
+        truth = os.path.join(src, "kidnapped", "truth")
+        cmd = [os.path.join(a.build, "bin", "wifi-pf-localization"), ini, "-q", "--no-plots",
+               "--seed", str(seed), "-n", "3000", "-m", os.path.join(truth, "transmitters.yaml"),
+               "-b", os.path.join(src, "kidnapped", "bearings.csv"),
+               "--sensor-pose", "0.1", "0", "0.4", "0", "0", "0", "-o", out]
+        if a.motion == "odometry":
+            cmd += ["--odometry-tum", os.path.join(truth, "odometry_tum.txt")]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode:
+            return room, seed, None, r.stderr.strip().splitlines()[-1:]
+        return room, seed, median_after_convergence(
+            read_tum(os.path.join(out, "estimate_tum.txt")),
+            read_tum(os.path.join(truth, "trajectory_tum.txt"))), None
+
+    results, failed = {}, 0
+    with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
+        for room, seed, m, err in ex.map(lambda rs: run(*rs), [(r, s) for r in rooms for s in seeds]):
+            if m is None:
+                print(f"{room} seed {seed}: wifi-pf-localization failed: {err}", file=sys.stderr)
+                failed += 1
+                continue
+            results.setdefault(room, []).append(m)
+    fmt = lambda v: "never" if math.isinf(v) else f"{v:.2f}"
+    good = never = good_rooms = 0
+    for room in rooms:
+        runs = results.get(room, [])
+        if not runs:
+            continue
+        med = statistics.median(runs)
+        good += sum(v <= 0.3 for v in runs)
+        never += sum(math.isinf(v) for v in runs)
+        good_rooms += med <= 0.3
+        print(f"{room}: {' '.join(fmt(v) for v in runs)}  median {fmt(med)} m")
+    n = sum(len(v) for v in results.values())
+    print(f"runs within 0.3 m: {good} / {n}, never converged: {never}, "
+          f"rooms with median within 0.3 m: {good_rooms} / {len(results)}")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
