@@ -98,11 +98,22 @@ def main():
     p.add_argument("--rooms", default="")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("overrides", nargs="*", help="Section/key=value")
-    a = p.parse_args()
+    a = p.parse_intermixed_args()
+    program = os.path.join(a.build, "bin", "wifi-pf-localization")
+    if not os.access(program, os.X_OK):
+        print(f"pf_rooms.py: {program}: not found (build first)", file=sys.stderr)
+        return 2
+    if not os.path.isdir(a.work):
+        print(f"pf_rooms.py: {a.work}: not a folder (a localization-accuracy -w DIR)", file=sys.stderr)
+        return 2
     rooms = sorted((d for d in os.listdir(a.work) if re.fullmatch(r"room-\d+", d)),
                    key=lambda d: int(d[5:]))
     if a.rooms:
         rooms = [r for r in rooms if r[5:] in a.rooms.split(",")]
+    if not rooms:
+        print(f"pf_rooms.py: no room-N folders in {a.work}"
+              + (f" among --rooms {a.rooms}" if a.rooms else ""), file=sys.stderr)
+        return 2
     seeds = [int(s) for s in a.seeds.split(",")]
     os.makedirs(a.out, exist_ok=True)
 
@@ -113,7 +124,7 @@ def main():
         ini = os.path.join(out, "pf.ini")
         derive_ini(os.path.join(src, "pf.ini"), ini, a.overrides)
         truth = os.path.join(src, "kidnapped", "truth")
-        cmd = [os.path.join(a.build, "bin", "wifi-pf-localization"), ini, "-q", "--no-plots",
+        cmd = [program, ini, "-q", "--no-plots",
                "--seed", str(seed), "-n", "3000", "-m", os.path.join(truth, "transmitters.yaml"),
                "-b", os.path.join(src, "kidnapped", "bearings.csv"),
                "--sensor-pose", "0.1", "0", "0.4", "0", "0", "0", "-o", out]
