@@ -356,14 +356,18 @@ TEST(OdometryMotion, SpreadGrowsWithTimeAndDistanceNotWithTheStepCount)
     // ~6.9 % of all (50 jump samples: +-0.6 % at 1 sigma).
     EXPECT_GT(farShare(*pdf, 0.3, 4 * sigma), 0.035);
     EXPECT_LT(farShare(*pdf, 0.3, 4 * sigma), 0.10);
-    // A tenth of the time, a tenth of the jumps (per time, not per step): ten steps of 0.05 s
-    // jump as often in all as the one of 0.5 s.
+    // Per time, not per step: a tenth of the time keeps a particle jump-free with probability
+    // 0.9^(1/10), so ten such steps jump as often in all as the one of 0.5 s. Beyond 6 sigma of
+    // this small step's tight part lie ~0 of it and the jumps' Gaussian tail beyond that bound.
     const auto w10 = m.makeAction(0.05, tenthStep);
     const auto* pdf10 = dynamic_cast<const mrpt::poses::CPosePDFParticles*>(w10->poseChange.get());
     ASSERT_NE(pdf10, nullptr);
-    const double sigma10 = m.stdXY(0.05, 0.03);
-    const double share10 = farShare(*pdf10, 0.03, 6 * sigma10);  // jumps are ~31 sigma10 wide
-    EXPECT_NEAR(share10, 0.0105 * 0.85, 0.004);
+    const double sigma10 = m.stdXY(0.05, 0.03), bound10 = 6 * sigma10;
+    const double jumpShare10 = 1 - std::pow(0.9, 0.1);
+    const double jumpSigma10 = std::hypot(sigma10, m.jumpStdXY_m);
+    const double expected10 = jumpShare10 * std::erfc(bound10 / (std::sqrt(2.0) * jumpSigma10));
+    // 50 jump samples: ~+-5 % of the share; 20000 draws: +-0.0007 at 1 sigma.
+    EXPECT_NEAR(farShare(*pdf10, 0.03, bound10), expected10, 0.004);
 
     // Read from the .ini; bad values name the key.
     mrpt::config::CConfigFileMemory ini(
