@@ -28,6 +28,7 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt/system/os.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
@@ -491,6 +492,15 @@ std::string fmt(double v, int prec = 2)
     return b;
 }
 
+/** "std_x_m,std_y_m,corr_xy,std_phi_deg" of a pose covariance. */
+std::string covarianceCsvCells(const mrpt::math::CMatrixDouble33& c)
+{
+    const double sx = std::sqrt(std::max(c(0, 0), 0.0)), sy = std::sqrt(std::max(c(1, 1), 0.0));
+    return fmt(sx, 5) + "," + fmt(sy, 5) + "," +
+           fmt(sx > 0 && sy > 0 ? c(0, 1) / (sx * sy) : 0.0, 4) + "," +
+           fmt(mrpt::RAD2DEG(std::sqrt(std::max(c(2, 2), 0.0))), 3);
+}
+
 /** The live device map in one line: `devices: name (x, y) +-sigma [m], ...`. */
 std::string devicesLine(const std::vector<DeviceEstimate>& devs)
 {
@@ -532,8 +542,8 @@ int main(int argc, char** argv)
                 "p", "plugin", "Plugin module(s) to load first, as rawlog-grabber -p", false,
                 "LIB.so", cmd);
             TCLAP::ValueArg<std::string> argOut(
-                "o", "out-dir", "Output folder (estimate_tum.txt, summary.txt)", false,
-                "wifi-localize-out", "DIR", cmd);
+                "o", "out-dir", "Output folder (estimate_tum.txt, estimate_cov.csv, summary.txt)",
+                false, "wifi-localize-out", "DIR", cmd);
             TCLAP::ValueArg<std::string> argRawlog(
                 "r", "rawlog", "Also record every observation seen to this rawlog", false, "",
                 "OUT.rawlog", cmd);
@@ -609,6 +619,12 @@ int main(int argc, char** argv)
                 throw std::runtime_error("cannot create " + outDir);
             std::ofstream tum(outDir + "/estimate_tum.txt");
             tum << "# wifi-localize estimate (PF mean): t x y z qx qy qz qw\n" << std::flush;
+            // The same poses with the particles' spread, so a user can check that it covers
+            // the error (and weigh the estimate when fusing it).
+            std::ofstream covCsv(outDir + "/estimate_cov.csv");
+            covCsv << "t,x_m,y_m,phi_deg,std_x_m,std_y_m,corr_xy,std_phi_deg,particles_std_x_m,"
+                      "particles_std_y_m,particles_corr_xy,particles_std_phi_deg\n"
+                   << std::flush;
             std::unique_ptr<RawlogWriter> rawlog;
             if (argRawlog.isSet()) rawlog = std::make_unique<RawlogWriter>(argRawlog.getValue());
 
@@ -664,6 +680,7 @@ int main(int argc, char** argv)
             std::deque<CObservationWiFiBearing::Ptr> recent;  // last second, for the view
             std::vector<double> lags;                         // per pose output [s]
             Trajectory2D est;
+            std::vector<std::array<double, 3>> estCov;  // position covariance per pose [m²]
             uint64_t nCsi = 0, nOdo = 0, nBearings = 0, nOther = 0, nFallback = 0;
             uint64_t secBearings = 0, secPoses = 0, poseOutputs = 0;
             double newestObs = 0, lastObsWall = 0, firstObsWall = 0, firstObsTime = 0;
@@ -699,6 +716,11 @@ int main(int argc, char** argv)
                 tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
                     << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
                     << std::endl;  // flushed per line
+                const auto c = loc.covariance();
+                estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
+                covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","
+                       << fmt(mrpt::RAD2DEG(m.phi), 3) << "," << covarianceCsvCells(c) << ","
+                       << covarianceCsvCells(loc.particleCovariance()) << std::endl;
                 return true;
             };
             std::string stopReason = "Ctrl+C";
@@ -904,12 +926,16 @@ int main(int argc, char** argv)
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());
                 std::vector<double> times, errs;
+                std::vector<bool> inside95;  // error inside the filter's own 95 % ellipse
                 for (size_t i = 0; i < est.size(); ++i)
                 {
                     mrpt::math::TPose2D g;
                     if (!gt.interpolate(est.t[i], g, 0.5)) continue;
                     times.push_back(est.t[i] - est.t.front());
-                    errs.push_back(std::hypot(est.poses[i].x - g.x, est.poses[i].y - g.y));
+                    const double ex = est.poses[i].x - g.x, ey = est.poses[i].y - g.y;
+                    errs.push_back(std::hypot(ex, ey));
+                    const auto& c = estCov[i];
+                    inside95.push_back(mahalanobis2(c[0], c[1], c[2], ex, ey) <= kChi2TwoDof95);
                 }
                 if (errs.empty())
                     throw std::runtime_error("the ground truth doesn't overlap the estimate");
@@ -923,12 +949,17 @@ int main(int argc, char** argv)
                     if (j < errs.size() && errs[j] < argThr.getValue()) tc = times[i];
                 }
                 std::vector<double> after;
+                size_t afterInside = 0;
                 for (size_t i = 0; i < errs.size(); ++i)
-                    if (tc >= 0 && times[i] >= tc) after.push_back(errs[i]);
+                    if (tc >= 0 && times[i] >= tc)
+                        after.push_back(errs[i]), afterInside += inside95[i] ? 1 : 0;
                 sum << "  error (all)    : " << computeStats(errs).asString() << "\n";
                 if (tc >= 0)
                     sum << "  converged after: " << fmt(tc) << " s\n"
-                        << "  after converged: " << computeStats(after).asString() << "\n";
+                        << "  after converged: " << computeStats(after).asString() << "\n"
+                        << "  in 95 % ellipse: "
+                        << fmt(100.0 * double(afterInside) / double(after.size()), 1)
+                        << " % of the estimates after convergence (the particles' covariance)\n";
                 else
                     sum << "  converged after: never\n";
             }

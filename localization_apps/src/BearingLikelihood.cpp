@@ -1,6 +1,9 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 
+#include <Eigen/Dense>
+#include <cmath>
+
 namespace mrpt_wifi::localization
 {
 double recordLogLikelihood(
@@ -41,6 +44,40 @@ std::optional<bool> recordAgrees(
             agrees.value_or(true) &&
             within(predictAod(tx.pose, s.x, s.y), r.aod, r.aodAmbiguous, r.aodMirror, r.aodStd);
     return agrees;
+}
+
+mrpt::math::CMatrixDouble33 bearingBiasCovariance(
+    const mrpt::math::TPose2D& robot, const mrpt::math::TPose2D& sensorOnRobot,
+    const std::vector<mrpt::math::TPoint2D>& transmitters, const BearingUse& use,
+    double biasStd_rad, double priorStd_m)
+{
+    Eigen::Matrix3d info =
+        Eigen::Vector3d(
+            1 / (priorStd_m * priorStd_m), 1 / (priorStd_m * priorStd_m), 1 / (M_PI * M_PI))
+            .asDiagonal();
+    const auto s = sensorWorldPose(robot, sensorOnRobot);
+    const double c = std::cos(robot.phi), sn = std::sin(robot.phi);
+    // How the array's position moves with the robot's heading (it sits off the centre).
+    const double dsx = -sn * sensorOnRobot.x - c * sensorOnRobot.y;
+    const double dsy = c * sensorOnRobot.x - sn * sensorOnRobot.y;
+    const double w = 1 / (biasStd_rad * biasStd_rad);
+    for (const auto& tx : transmitters)
+    {
+        const double dx = tx.x - s.x, dy = tx.y - s.y, r2 = dx * dx + dy * dy;
+        if (r2 < 1e-4) continue;  // at the transmitter: no direction
+        // The direction of the line array–transmitter by the robot's x, y, φ: both angles
+        // turn with it; the AoA, in the array's frame, also with the heading itself.
+        const Eigen::Vector3d line(dy / r2, -dx / r2, (dy * dsx - dx * dsy) / r2);
+        if (use.aod) info += w * line * line.transpose();
+        if (use.aoa)
+        {
+            const Eigen::Vector3d aoa = line - Eigen::Vector3d(0, 0, 1);
+            info += w * aoa * aoa.transpose();
+        }
+    }
+    mrpt::math::CMatrixDouble33 cov;
+    cov.asEigen() = info.inverse();
+    return cov;
 }
 
 }  // namespace mrpt_wifi::localization

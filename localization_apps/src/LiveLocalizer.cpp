@@ -4,6 +4,7 @@
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
@@ -89,6 +90,9 @@ void LiveLocalizerOptions::loadFromConfigFile(
     if (maxPerStep < 0)
         throw std::invalid_argument("[" + s + "] max_bearings_per_step must be >= 0");
     maxBearingsPerStep = size_t(maxPerStep);
+    bearingBiasStd_deg = c.read_double(s, "bearing_bias_std_deg", bearingBiasStd_deg);
+    if (!(bearingBiasStd_deg >= 0) || !std::isfinite(bearingBiasStd_deg))
+        throw std::invalid_argument("[" + s + "] bearing_bias_std_deg must be >= 0");
 }
 
 LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std::string& iniDir)
@@ -183,8 +187,13 @@ bool LiveLocalizer::step()
     else
         act = *motion_.makeAction(dt, cv_.predictIncrement(t));
     for (const auto& o : sf)
-        recovery_->checkBearing(
-            mrpt::Clock::toDouble(o->timestamp), static_cast<const CObservationWiFiBearing&>(*o));
+    {
+        const auto& b = static_cast<const CObservationWiFiBearing&>(*o);
+        recovery_->checkBearing(mrpt::Clock::toDouble(o->timestamp), b);
+        auto& heard = heard_[b.transmitter];
+        heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
+        sensorOnRobot_ = mrpt::poses::CPose2D(b.sensorPose).asTPose();
+    }
     if (const double f = recovery_->reseedFraction(t, dt); f > 0)
         act = withReseeding(act, f, recovery_->reseedRadius_m());
     mrpt::obs::CActionCollection acts;
@@ -202,6 +211,30 @@ bool LiveLocalizer::step()
 mrpt::math::TPose2D LiveLocalizer::mean() const
 {
     return pdf_.getMeanVal().asTPose();
+}
+
+mrpt::math::CMatrixDouble33 LiveLocalizer::particleCovariance() const
+{
+    return std::get<0>(pdf_.getCovarianceAndMean());
+}
+
+mrpt::math::CMatrixDouble33 LiveLocalizer::covariance() const
+{
+    auto cov = particleCovariance();
+    if (!(opts_.bearingBiasStd_deg > 0)) return cov;
+    // A transmitter heard in the last few seconds constrains the pose now.
+    const double kHeardWithin_s = 5.0;
+    std::vector<mrpt::math::TPoint2D> txs;
+    for (const auto& [mac, t] : heard_)
+        if (t >= lastStepTime_ - kHeardWithin_s)
+            if (const auto* tx = wifiMap_->transmitters().find(mac))
+                txs.emplace_back(tx->pose.x, tx->pose.y);
+    const auto& a = wifiMap_->area();
+    const double prior_m = a ? std::hypot(a->max.x - a->min.x, a->max.y - a->min.y) : 100.0;
+    cov += bearingBiasCovariance(
+        mean(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
+        mrpt::DEG2RAD(opts_.bearingBiasStd_deg), prior_m);
+    return cov;
 }
 
 double LiveLocalizer::spread_m() const

@@ -12,10 +12,12 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 #include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/localization/ParticleRecovery.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 
+#include <Eigen/Dense>
 #include <fstream>
 
 #include "SyntheticWorld.h"
@@ -444,4 +446,58 @@ TEST(ParticleRecovery, ReseedingJumpsCoverTheAreaUniformly)
     EXPECT_EQ(
         withReseeding(odo, 0.0, radius).poseChange.get()->GetRuntimeClass(),
         odo.poseChange.get()->GetRuntimeClass());
+}
+
+TEST(BearingBias, CovarianceIsTheInverseFisherInformationOfOneBearingPerTransmitter)
+{
+    // The Jacobians of AoA and AoD (with the array off the robot's centre) checked by finite
+    // differences of predictAoa() / predictAod(), so the analytic derivative cannot hide an
+    // error.
+    const mrpt::math::TPose2D robot(3, 2, 0.4), sensor(0.1, 0.05, 0.2);
+    const std::vector<mrpt::math::TPoint2D> spread = {{0, 0}, {8, 1}, {4, 7}};
+    const double bias = mrpt::DEG2RAD(3.0), prior = 50.0;
+    for (const BearingUse use : {BearingUse{true, false}, BearingUse{false, true}})
+    {
+        Eigen::Matrix3d info =
+            Eigen::Vector3d(1 / (prior * prior), 1 / (prior * prior), 1 / (M_PI * M_PI))
+                .asDiagonal();
+        for (const auto& tx : spread)
+        {
+            const auto angle = [&](const mrpt::math::TPose2D& p)
+            {
+                const auto s = sensorWorldPose(p, sensor);
+                return use.aoa ? predictAoa(s, tx.x, tx.y)
+                               : predictAod(mrpt::math::TPose2D(tx.x, tx.y, 0.7), s.x, s.y);
+            };
+            Eigen::Vector3d j;
+            for (int k = 0; k < 3; ++k)
+            {
+                auto plus = robot, minus = robot;
+                const double h = 1e-6;
+                (k == 0 ? plus.x : k == 1 ? plus.y : plus.phi) += h;
+                (k == 0 ? minus.x : k == 1 ? minus.y : minus.phi) -= h;
+                j[k] = wrapToPi(angle(plus) - angle(minus)) / (2 * h);
+            }
+            info += j * j.transpose() / (bias * bias);
+        }
+        const Eigen::Matrix3d expected = info.inverse();
+        const auto cov = bearingBiasCovariance(robot, sensor, spread, use, bias, prior);
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(cov(r, c), expected(r, c), 1e-5 * std::abs(expected(r, c)) + 1e-12)
+                    << (use.aoa ? "AoA" : "AoD") << " (" << r << ", " << c << ")";
+    }
+    const BearingUse aoa{true, false};
+    const auto cov = bearingBiasCovariance(robot, sensor, spread, aoa, bias, prior);
+    // Well spread transmitters a few metres away: a 3 degree bias is decimetres.
+    const double sigmaSpread = std::sqrt(std::max(cov(0, 0), cov(1, 1)));
+    EXPECT_GT(sigmaSpread, 0.05);
+    EXPECT_LT(sigmaSpread, 0.5);
+    // Two of them side by side (a room with two APs 0.1 m apart): the pose is much less fixed.
+    const auto sideBySide =
+        bearingBiasCovariance(robot, sensor, {{0, 0}, {8, 1}, {8.1, 1}}, aoa, bias, prior);
+    EXPECT_GT(sideBySide(0, 0) + sideBySide(1, 1), 4 * (cov(0, 0) + cov(1, 1)));
+    // Nothing heard: the prior alone, large but finite.
+    const auto none = bearingBiasCovariance(robot, sensor, {}, aoa, bias, prior);
+    EXPECT_NEAR(none(0, 0), prior * prior, 1e-6 * prior * prior);
 }

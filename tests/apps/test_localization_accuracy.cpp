@@ -79,6 +79,10 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // that both ran on the streamed room and, with odometry, stayed near it (7.1 × 7.7 m).
     EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "live_noodo_worst_all_m"))) << r.output;
+    // The live filter's reported uncertainty is judged against its error once it converged
+    // (a zero or missing covariance would put nearly every error outside its ellipse).
+    if (std::isfinite(number(room, "live_odo_median_m")))
+        EXPECT_GE(number(room, "live_odo_inside95_after"), 0.5) << r.output;
     EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "reduction_estimated"))) << r.output;
     EXPECT_EQ(number(room, "devices"), 3) << r.output;

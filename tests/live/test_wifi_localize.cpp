@@ -6,6 +6,7 @@
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
@@ -205,6 +206,37 @@ LiveRun runLive(
     }
     return r;
 }
+
+/** The reported uncertainty covers the error: one row of estimate_cov.csv per pose of the TUM
+ *  output, and after a 5 s warm-up the true position inside the estimate's 95 % ellipse in at
+ *  least 90 % of the poses. */
+void expectUncertaintyCoversTheError(const test::TempDir& tmp, const LiveRun& r)
+{
+    std::ifstream covCsv(tmp.file("out/estimate_cov.csv"));
+    std::string line;
+    ASSERT_TRUE(std::getline(covCsv, line));
+    EXPECT_EQ(line.rfind("t,x_m,y_m,phi_deg,std_x_m,std_y_m,corr_xy,std_phi_deg", 0), 0u) << line;
+    size_t rows = 0, judged = 0, inside = 0;
+    for (; std::getline(covCsv, line); ++rows)
+    {
+        std::vector<double> v;
+        std::stringstream ss(line);
+        for (std::string cell; std::getline(ss, cell, ',');) v.push_back(std::stod(cell));
+        ASSERT_EQ(v.size(), 12u) << line;
+        ASSERT_LT(rows, r.estimate.size());
+        EXPECT_DOUBLE_EQ(v[0], r.estimate.t[rows]);
+        EXPECT_GE(v[4], v[8]);  // the reported sigma includes the particles' own spread
+        mrpt::math::TPose2D g;
+        if (v[0] - r.estimate.t.front() < 5.0 || !r.truth.interpolate(v[0], g, 0.5)) continue;
+        const double xy = v[6] * v[4] * v[5];
+        ++judged;
+        inside +=
+            mahalanobis2(v[4] * v[4], xy, v[5] * v[5], v[1] - g.x, v[2] - g.y) <= kChi2TwoDof95;
+    }
+    EXPECT_EQ(rows, r.estimate.size());
+    ASSERT_GT(judged, 20u);
+    EXPECT_GE(double(inside) / double(judged), 0.9) << inside << " of " << judged;
+}
 }  // namespace
 
 TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
@@ -218,6 +250,7 @@ TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
     // Kidnapped: the filter starts uniform over the room; after 5 s of bearings it must be
     // where the robot is (the target is a median <= 0.5 m after convergence).
     EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
+    expectUncertaintyCoversTheError(tmp, r);
 
     // The rawlog holds what the sensors delivered: CSI of 4 APs and the odometry stream.
     mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));
@@ -274,6 +307,7 @@ TEST(WifiLocalize, UsesTheCsiSensorsOwnLiveBearings)
     const auto e = errorsOf(r.estimate, r.truth, 5.0);
     ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
     EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
+    expectUncertaintyCoversTheError(tmp, r);
 
     // What wifi-localize saw: the sensor's bearings, labelled after it, right after the CSI.
     mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));

@@ -1,12 +1,15 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
+#include <mrpt/math/CMatrixFixed.h>
+#include <mrpt/math/TPoint2D.h>
 #include <mrpt/math/TPose2D.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
 #include <cmath>
 #include <optional>
+#include <vector>
 
 namespace mrpt_wifi::localization
 {
@@ -81,5 +84,19 @@ double recordLogLikelihood(
 std::optional<bool> recordAgrees(
     const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
     const RobustBearingModel& model, const BearingUse& use, double nSigma = 3.0);
+
+/** Covariance of (x, y, φ) [m², rad²] that a bias of `biasStd_rad` per transmitter and angle,
+ *  common to all its bearings (multipath seen alike from nearby poses, which no number of
+ *  bearings averages out), leaves in a robot pose fixed by them: the inverse Fisher information
+ *  of one bearing per transmitter and angle in `use` (AoA: direction and heading; AoD:
+ *  direction only) at `robot` (the array's offset on the robot included), with a weak prior of
+ *  `priorStd_m` and π on the pose so that a geometry that does not fix it (too few
+ *  transmitters, all in line) gives a large but finite covariance. Its position block grows
+ *  where the transmitters are seen under small angles (two side by side, all far away): what a
+ *  particle cloud does not know when its bearings agree with each other. */
+mrpt::math::CMatrixDouble33 bearingBiasCovariance(
+    const mrpt::math::TPose2D& robot, const mrpt::math::TPose2D& sensorOnRobot,
+    const std::vector<mrpt::math::TPoint2D>& transmitters, const BearingUse& use,
+    double biasStd_rad, double priorStd_m);
 
 }  // namespace mrpt_wifi::localization

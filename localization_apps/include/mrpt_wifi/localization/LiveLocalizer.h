@@ -14,6 +14,7 @@
 #include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,12 @@ struct LiveLocalizerOptions
      *  single steps would have added, so batching changes the cost, not the model (with an
      *  `[OdometryMotion]` section the spread depends on time and distance alone). */
     size_t maxBearingsPerStep = 0;
+    /** `bearing_bias_std_deg`: σ of a bias common to one transmitter's AoAs (multipath seen
+     *  alike from nearby poses) that the particles cannot know of: its effect on the pose
+     *  (bearingBiasCovariance at the estimate, for the angles the map uses, over the transmitters
+     * heard in the last 5 s) is added to the particles' covariance in covariance(). 0: the
+     * particles' covariance alone. */
+    double bearingBiasStd_deg = 3.0;
 
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
 };
@@ -85,6 +92,15 @@ public:
     /** Weighted mean and the particles' spread (sqrt of the largest position variance). */
     mrpt::math::TPose2D mean() const;
     double spread_m() const;
+    /** The particles' weighted covariance of (x, y, φ) [m², m², rad²] (MRPT's
+     *  getCovarianceAndMean: the heading's spread around the mean, wrapped). */
+    mrpt::math::CMatrixDouble33 particleCovariance() const;
+    /** The uncertainty of mean(): particleCovariance() plus the transmitters' bearing bias
+     *  (LiveLocalizerOptions::bearingBiasStd_deg). A converged cloud is as narrow as the
+     *  bearings agree with each other, not as their common error: alone it covered the error
+     *  of 54-79 % of the estimates after convergence in its 95 % ellipse (development rooms
+     *  1-4, with odometry). */
+    mrpt::math::CMatrixDouble33 covariance() const;
     /** Timestamp of the newest bearing of the last step [s, UNIX]. */
     double lastStepTime() const { return lastStepTime_; }
     size_t steps() const { return steps_; }
@@ -110,6 +126,10 @@ private:
     std::optional<OdometryMotion> odoMotion_;  //!< [OdometryMotion], if the .ini has one
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     std::vector<CObservationWiFiBearing::Ptr> pending_;
+    /** Newest bearing time [s] per transmitter used, and the receive array's pose on the
+     *  robot (of the newest bearing): for covariance(). */
+    std::map<MacAddress, double> heard_;
+    mrpt::math::TPose2D sensorOnRobot_;
     UnknownMotion motion_;
     ConstantVelocityPrediction cv_{motion_};
     ParticleRecoveryOptions recoveryOptions_;
