@@ -190,8 +190,15 @@ bool LiveLocalizer::step()
     {
         const auto& b = static_cast<const CObservationWiFiBearing&>(*o);
         recovery_->checkBearing(mrpt::Clock::toDouble(o->timestamp), b);
-        auto& heard = heard_[b.transmitter];
-        heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
+        // Heard: a bearing with an angle the map's likelihood uses (as recordLogLikelihood
+        // selects them); a wide or missing one constrains nothing.
+        const auto& lo = wifiMap_->likelihoodOptions;
+        if ((lo.use.aoa && b.aoaStd_rad <= lo.model.maxStd_rad) ||
+            (lo.use.aod && b.hasAod && b.aodStd_rad <= lo.model.maxStd_rad))
+        {
+            auto& heard = heard_[b.transmitter];
+            heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
+        }
         sensorOnRobot_ = mrpt::poses::CPose2D(b.sensorPose).asTPose();
     }
     if (const double f = recovery_->reseedFraction(t, dt); f > 0)
