@@ -619,8 +619,9 @@ int main(int argc, char** argv)
                 throw std::runtime_error("cannot create " + outDir);
             std::ofstream tum(outDir + "/estimate_tum.txt");
             tum << "# wifi-localize estimate (PF mean): t x y z qx qy qz qw\n" << std::flush;
-            // The same poses with the particles' spread, so a user can check that it covers
-            // the error (and weigh the estimate when fusing it).
+            // The same poses with their uncertainty (LiveLocalizer::uncertainty(): reported, then
+            // the particles' alone), so a user can check that it covers the error and weigh the
+            // estimate when fusing it.
             std::ofstream covCsv(outDir + "/estimate_cov.csv");
             covCsv << "t,x_m,y_m,phi_deg,std_x_m,std_y_m,corr_xy,std_phi_deg,particles_std_x_m,"
                       "particles_std_y_m,particles_corr_xy,particles_std_phi_deg\n"
@@ -716,11 +717,12 @@ int main(int argc, char** argv)
                 tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
                     << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
                     << std::endl;  // flushed per line
-                const auto c = loc.covariance();
+                const auto u = loc.uncertainty();
+                const auto& c = u.reported;
                 estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
                 covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","
                        << fmt(mrpt::RAD2DEG(m.phi), 3) << "," << covarianceCsvCells(c) << ","
-                       << covarianceCsvCells(loc.particleCovariance()) << std::endl;
+                       << covarianceCsvCells(u.particles) << std::endl;
                 return true;
             };
             std::string stopReason = "Ctrl+C";
@@ -959,7 +961,7 @@ int main(int argc, char** argv)
                         << "  after converged: " << computeStats(after).asString() << "\n"
                         << "  in 95 % ellipse: "
                         << fmt(100.0 * double(afterInside) / double(after.size()), 1)
-                        << " % of the estimates after convergence (the particles' covariance)\n";
+                        << " % of the estimates after convergence (estimate_cov.csv's σ)\n";
                 else
                     sum << "  converged after: never\n";
             }

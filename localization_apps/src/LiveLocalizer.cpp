@@ -220,15 +220,11 @@ mrpt::math::TPose2D LiveLocalizer::mean() const
     return pdf_.getMeanVal().asTPose();
 }
 
-mrpt::math::CMatrixDouble33 LiveLocalizer::particleCovariance() const
+LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
 {
-    return std::get<0>(pdf_.getCovarianceAndMean());
-}
-
-mrpt::math::CMatrixDouble33 LiveLocalizer::covariance() const
-{
-    auto cov = particleCovariance();
-    if (!(opts_.bearingBiasStd_deg > 0)) return cov;
+    const auto [particles, mean] = pdf_.getCovarianceAndMean();
+    Uncertainty u{particles, particles};
+    if (!(opts_.bearingBiasStd_deg > 0)) return u;
     // A transmitter heard in the last few seconds constrains the pose now.
     const double kHeardWithin_s = 5.0;
     std::vector<mrpt::math::TPoint2D> txs;
@@ -238,10 +234,10 @@ mrpt::math::CMatrixDouble33 LiveLocalizer::covariance() const
                 txs.emplace_back(tx->pose.x, tx->pose.y);
     const auto& a = wifiMap_->area();
     const double prior_m = a ? std::hypot(a->max.x - a->min.x, a->max.y - a->min.y) : 100.0;
-    cov += bearingBiasCovariance(
-        mean(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
+    u.reported += bearingBiasCovariance(
+        mean.asTPose(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
         mrpt::DEG2RAD(opts_.bearingBiasStd_deg), prior_m);
-    return cov;
+    return u;
 }
 
 double LiveLocalizer::spread_m() const

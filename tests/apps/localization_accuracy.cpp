@@ -103,7 +103,7 @@ KidnappedFigures kidnappedFigures(
 {
     KidnappedFigures k;
     std::vector<double> times, errs;
-    std::vector<int> inside;  // per error: inside the 95 % ellipse (-1: no covariance)
+    std::vector<bool> inside;  // per error: inside the 95 % ellipse (with covariances only)
     const bool withCov = covariances.size() == est.size();
     for (size_t i = 0; i < est.size(); ++i)
     {
@@ -112,8 +112,11 @@ KidnappedFigures kidnappedFigures(
         times.push_back(est.t[i] - est.t.front());
         const double ex = est.poses[i].x - g.x, ey = est.poses[i].y - g.y;
         errs.push_back(std::hypot(ex, ey));
-        const auto& c = withCov ? covariances[i] : std::array<double, 3>{};
-        inside.push_back(withCov ? mahalanobis2(c[0], c[1], c[2], ex, ey) <= kChi2TwoDof95 : -1);
+        if (withCov)
+        {
+            const auto& c = covariances[i];
+            inside.push_back(mahalanobis2(c[0], c[1], c[2], ex, ey) <= kChi2TwoDof95);
+        }
     }
     k.estimate = est;
     k.estimates = errs.size();
@@ -142,7 +145,7 @@ KidnappedFigures kidnappedFigures(
     k.worstAfter_m = computeStats(after).max;
     k.worstAll_m = computeStats(errs).max;
     if (withCov && k.converged)
-        k.inside95After = double(std::count(inside.begin() + long(first), inside.end(), 1)) /
+        k.inside95After = double(std::count(inside.begin() + long(first), inside.end(), true)) /
                           double(inside.size() - first);
     return k;
 }

@@ -50,11 +50,11 @@ struct LiveLocalizerOptions
      *  single steps would have added, so batching changes the cost, not the model (with an
      *  `[OdometryMotion]` section the spread depends on time and distance alone). */
     size_t maxBearingsPerStep = 0;
-    /** `bearing_bias_std_deg`: σ of a bias common to one transmitter's AoAs (multipath seen
+    /** `bearing_bias_std_deg`: σ of a bias common to one transmitter's bearings (multipath seen
      *  alike from nearby poses) that the particles cannot know of: its effect on the pose
-     *  (bearingBiasCovariance at the estimate, for the angles the map uses, over the transmitters
-     * heard in the last 5 s) is added to the particles' covariance in covariance(). 0: the
-     * particles' covariance alone. */
+     *  (bearingBiasCovariance at the estimate, for the angles the map uses, over the
+     *  transmitters heard in the last 5 s) is added to the particles' covariance in
+     *  uncertainty(). 0: the particles' covariance alone. */
     double bearingBiasStd_deg = 3.0;
 
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
@@ -92,15 +92,20 @@ public:
     /** Weighted mean and the particles' spread (sqrt of the largest position variance). */
     mrpt::math::TPose2D mean() const;
     double spread_m() const;
-    /** The particles' weighted covariance of (x, y, φ) [m², m², rad²] (MRPT's
-     *  getCovarianceAndMean: the heading's spread around the mean, wrapped). */
-    mrpt::math::CMatrixDouble33 particleCovariance() const;
-    /** The uncertainty of mean(): particleCovariance() plus the transmitters' bearing bias
-     *  (LiveLocalizerOptions::bearingBiasStd_deg). A converged cloud is as narrow as the
-     *  bearings agree with each other, not as their common error: alone it covered the error
-     *  of 54-79 % of the estimates after convergence in its 95 % ellipse (development rooms
-     *  1-4, with odometry). */
-    mrpt::math::CMatrixDouble33 covariance() const;
+    /** Covariances of (x, y, φ) [m², m², rad²] of mean(). */
+    struct Uncertainty
+    {
+        /** The particles' weighted covariance (MRPT's getCovarianceAndMean: the heading's
+         *  spread around the mean, wrapped). */
+        mrpt::math::CMatrixDouble33 particles;
+        /** `particles` plus the transmitters' bearing bias (bearing_bias_std_deg): a
+         *  converged cloud is as narrow as the bearings agree with each other, not as their
+         *  common error. Alone its 95 % ellipse held 25-77 % of the errors after convergence
+         *  with odometry (development rooms 1-10, live). */
+        mrpt::math::CMatrixDouble33 reported;
+    };
+    /** One pass over the particles for both. */
+    Uncertainty uncertainty() const;
     /** Timestamp of the newest bearing of the last step [s, UNIX]. */
     double lastStepTime() const { return lastStepTime_; }
     size_t steps() const { return steps_; }
@@ -127,7 +132,7 @@ private:
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     std::vector<CObservationWiFiBearing::Ptr> pending_;
     /** Newest bearing time [s] per transmitter used, and the receive array's pose on the
-     *  robot (of the newest bearing): for covariance(). */
+     *  robot (of the newest bearing): for uncertainty(). */
     std::map<MacAddress, double> heard_;
     mrpt::math::TPose2D sensorOnRobot_;
     UnknownMotion motion_;
