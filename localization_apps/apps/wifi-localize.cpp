@@ -290,7 +290,7 @@ public:
         s.px.reserve(pdf.size()), s.py.reserve(pdf.size());
         for (const auto& p : pdf.m_particles)
             s.px.push_back(float(p.d.x)), s.py.push_back(float(p.d.y));
-        s.mean = loc.mean();
+        s.mean = loc.estimate();
         const double len = 6.0;
         for (const auto& b : recent)
         {
@@ -618,7 +618,9 @@ int main(int argc, char** argv)
             if (!mrpt::system::directoryExists(outDir))
                 throw std::runtime_error("cannot create " + outDir);
             std::ofstream tum(outDir + "/estimate_tum.txt");
-            tum << "# wifi-localize estimate (PF mean): t x y z qx qy qz qw\n" << std::flush;
+            tum << "# wifi-localize estimate (PF mean, with odometry refined by the window "
+                   "smoother): t x y z qx qy qz qw\n"
+                << std::flush;
             // The same poses with their uncertainty (LiveLocalizer::uncertainty(): reported, then
             // the particles' alone), so a user can check that it covers the error and weigh the
             // estimate when fusing it.
@@ -703,7 +705,7 @@ int main(int argc, char** argv)
                     stepped = loc.step() || stepped;
                 lastOutput = Clock::now();
                 if (!stepped) return false;
-                const auto m = loc.mean();
+                const auto m = loc.estimate();
                 const double t = loc.lastStepTime();
                 // A bearing that arrived late (older than the last output) refines the filter
                 // but gives no newer pose: the trajectory stays strictly increasing in time, as
@@ -833,7 +835,7 @@ int main(int argc, char** argv)
                 std::string statusText;
                 if (sinceStatus >= 1.0 || (view && now - lastView > std::chrono::milliseconds(200)))
                 {
-                    const auto m = loc.mean();
+                    const auto m = loc.estimate();
                     statusText =
                         "t=" + fmt(elapsed(), 1) + "s pose=(" + fmt(m.x) + ", " + fmt(m.y) + ", " +
                         fmt(mrpt::RAD2DEG(m.phi), 0) + " deg) spread=" + fmt(loc.spread_m()) +
@@ -921,7 +923,15 @@ int main(int argc, char** argv)
                         : "none (unknown motion model: " + loc.unknownMotion().asString() + ")")
                 << "\n"
                 << "  recovery       : " << loc.recoveryOptions().asString() << ": "
-                << recoverySummary(loc.recovery()) << "\n";
+                << recoverySummary(loc.recovery()) << "\n"
+                << "  window smoother: " << loc.smoother().options().asString();
+            if (loc.smoother().options().enabled)
+                sum << ": " << loc.smoother().accepted() << " of " << loc.smoother().solves()
+                    << " solves used (" << loc.smoother().restarts()
+                    << " restarts: newest bearings unexplained)"
+                    << (loc.hasOdometry() ? "" : " (it needs odometry)") << ", "
+                    << fmt(loc.smoother().solveTime_s(), 2) << " s";
+            sum << "\n";
             if (const auto area = areaSummary(loc.wifiMap(), est.poses); !area.empty())
                 sum << "  area           : " << area << "\n";
             if (argGt.isSet() && !est.empty())

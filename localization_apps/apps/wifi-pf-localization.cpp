@@ -23,6 +23,7 @@
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/localization/WindowSmoother.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
 #include <algorithm>
@@ -380,6 +381,9 @@ int main(int argc, char** argv)
             }
             ParticleRecoveryOptions recoveryOptions;
             recoveryOptions.loadFromConfigFile(ini, "ParticleRecovery");
+            WindowSmootherOptions smootherOptions;
+            smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
+            if (odo.empty()) smootherOptions.enabled = false;  // its graph needs odometry
             if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
                 std::cerr << "warning: [ParticleRecovery] needs the map's area (min_x ... max_y "
                              "in its creationOpts, or an init_PDF box): off\n";
@@ -468,7 +472,36 @@ int main(int argc, char** argv)
             Trajectory2D est;
             for (const auto& [t, p] : app.out_estimated_path)
                 est.push_back(mrpt::Clock::toDouble(t), mrpt::math::TPose2D(p.x, p.y, p.yaw));
-            est.saveTum(outDir + "/estimate_tum.txt", "wifi-pf-localization estimate (PF mean)");
+            // The window smoother refines the filter's estimates causally: each from the
+            // odometry and bearings up to its own time. The filter's spread is not kept by
+            // MRPT's loop: the smoother's residual test alone decides (offline).
+            WindowSmoother smoother(smootherOptions, txs);
+            size_t refined = 0;
+            if (smootherOptions.enabled)
+            {
+                est.saveTum(
+                    outDir + "/pf_estimate_tum.txt", "wifi-pf-localization particle filter mean");
+                auto inTime = usable;
+                std::stable_sort(
+                    inTime.begin(), inTime.end(),
+                    [](const auto& a, const auto& b) { return a.t < b.t; });
+                size_t io = 0, ib = 0;
+                for (size_t i = 0; i < est.size(); ++i)
+                {
+                    const double t = est.t[i];
+                    for (; io < odo.size() && odo.t[io] <= t; ++io)
+                        smoother.addOdometry(odo.t[io], odo.poses[io]);
+                    for (; ib < inTime.size() && inTime[ib].t <= t; ++ib)
+                        smoother.addBearing(inTime[ib]);
+                    if (const auto p = smoother.update(t, est.poses[i], 0.0))
+                        est.poses[i] = *p, ++refined;
+                }
+            }
+            est.saveTum(
+                outDir + "/estimate_tum.txt",
+                smootherOptions.enabled
+                    ? "wifi-pf-localization estimate (PF mean refined by the window smoother)"
+                    : "wifi-pf-localization estimate (PF mean)");
 
             std::ostringstream sum;
             sum << "wifi-pf-localization summary\n"
@@ -488,6 +521,13 @@ int main(int argc, char** argv)
             if (const auto area = areaSummary(*wifiMap, est.poses); !area.empty())
                 sum << "  area           : " << area
                     << (areaFromInitPdf ? " (the init_PDF box)" : " (the map's)") << "\n";
+            sum << "  window smoother: " << smootherOptions.asString();
+            if (smootherOptions.enabled)
+                sum << ": " << refined << " of " << est.size() << " estimates refined, "
+                    << smoother.accepted() << " of " << smoother.solves() << " solves used ("
+                    << smoother.restarts() << " restarts: newest bearings unexplained), "
+                    << fmt(smoother.solveTime_s(), 2) << " s";
+            sum << "\n";
             sum << "  recovery       : " << recoveryOptions.asString();
             if (const auto& r = app.recovery(); r) sum << ": " << recoverySummary(*r);
             sum << "\n";

@@ -670,6 +670,16 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
             best.placement = how;
         }
     };
+    if (!in.placements.empty())
+    {
+        for (size_t i = 0; i < in.placements.size(); ++i)
+            consider(
+                solveOnce(in, opt, in.placements[i], nullptr),
+                "given placement " + std::to_string(i + 1));
+        best.hypotheses = tried;
+        best.totalTime_s = total.Tac();
+        return best;
+    }
     const auto places = placeTrajectoryCandidates(
         placed, in.bearings, in.aps, 30, size_t(std::max(1, opt.placementHypotheses)));
     for (size_t i = 0; i < places.size(); ++i)

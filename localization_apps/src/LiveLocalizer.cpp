@@ -108,6 +108,9 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     cv_ = ConstantVelocityPrediction(motion_);
     recoveryOptions_.loadFromConfigFile(ini, "ParticleRecovery");
     recovery_.emplace(recoveryOptions_, wifiMap_.get());
+    WindowSmootherOptions smootherOptions;
+    smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
+    smoother_ = WindowSmoother(smootherOptions, wifiMap_->transmitters());
 
     const std::string sect = "LocalizationExperiment";
     const int n = ini.read_int(sect, "particles_count", 0, true);
@@ -140,6 +143,7 @@ void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
         wifiMap_->likelihoodOptions.bearingWeight *= odoMotion_->bearingWeight;
     lastOdo_ = odo.odometry;
     if (!odoAtLastStep_) odoAtLastStep_ = odo.odometry;
+    smoother_.addOdometry(mrpt::Clock::toDouble(odo.timestamp), odo.odometry.asTPose());
 }
 
 void LiveLocalizer::addBearing(const CObservationWiFiBearing::Ptr& b)
@@ -200,6 +204,7 @@ bool LiveLocalizer::step()
             heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
         }
         sensorOnRobot_ = mrpt::poses::CPose2D(b.sensorPose).asTPose();
+        smoother_.addBearing(recordFromObservation(b));
     }
     if (const double f = recovery_->reseedFraction(t, dt); f > 0)
         act = withReseeding(act, f, recovery_->reseedRadius_m());
@@ -209,6 +214,8 @@ bool LiveLocalizer::step()
     const auto estimate = mean();
     if (!lastOdo_) cv_.addEstimate(t, estimate);
     recovery_->setEstimate(estimate);
+    smoothed_.reset();
+    if (lastOdo_) smoothed_ = smoother_.update(t, estimate, spread_m());
     lastStepTime_ = t;
     ++steps_;
     bearingsUsed_ += n;
@@ -222,7 +229,7 @@ mrpt::math::TPose2D LiveLocalizer::mean() const
 
 LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
 {
-    const auto [particles, mean] = pdf_.getCovarianceAndMean();
+    const auto particles = std::get<0>(pdf_.getCovarianceAndMean());
     Uncertainty u{particles, particles};
     if (!(opts_.bearingBiasStd_deg > 0)) return u;
     // A transmitter heard in the last few seconds constrains the pose now.
@@ -235,7 +242,7 @@ LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
     const auto& a = wifiMap_->area();
     const double prior_m = a ? std::hypot(a->max.x - a->min.x, a->max.y - a->min.y) : 100.0;
     u.reported += bearingBiasCovariance(
-        mean.asTPose(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
+        estimate(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
         mrpt::DEG2RAD(opts_.bearingBiasStd_deg), prior_m);
     return u;
 }

@@ -904,7 +904,9 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
               << (evaluation ? "evaluation" : "development") << " seeds " << rooms.front().seed
               << "–" << rooms.back().seed << ")\n\n"
               << "Kidnapped: a " << fmt(o.kidnappedDuration_s, 0) << " s random drive, "
-              << o.particles << " particles, errors of the PF mean against the true poses "
+              << o.particles
+              << " particles, errors of the estimate (PF mean; with odometry refined by the window "
+                 "smoother) against the true poses "
               << "(converged: error < " << fmt(o.convergedThreshold_m, 1) << " m for "
               << fmt(o.convergedHold_s, 0)
               << " s; worst = maximum after convergence). Drift and devices: " << o.laps

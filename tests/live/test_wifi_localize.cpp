@@ -251,6 +251,11 @@ TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
     // where the robot is (the target is a median <= 0.5 m after convergence).
     EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
     expectUncertaintyCoversTheError(tmp, r);
+    // With odometry the window smoother refines the estimate live, as offline.
+    std::smatch sm;
+    const std::regex smoother("window smoother: .*: ([0-9]+) of ([0-9]+) solves used");
+    ASSERT_TRUE(std::regex_search(r.result.output, sm, smoother)) << r.result.output;
+    EXPECT_GT(std::stoul(sm[1]), 0u) << r.result.output;
 
     // The rawlog holds what the sensors delivered: CSI of 4 APs and the odometry stream.
     mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));

@@ -77,6 +77,10 @@ struct GraphSlamInput
     const mrpt::graphs::CNetworkOfPoses2DInf* graph = nullptr;
     std::vector<BearingRecord> bearings;
     TransmitterMap aps;  //!< known poses (apsKnown) or names/arrays only; may be empty if unknown
+    /** Known APs: the starts to optimise (rigid transforms from the odometry frame to the map,
+     *  e.g. from a particle filter's estimate); the lowest final cost wins. Empty: searched
+     *  (placementHypotheses, alignEstimatedAps). */
+    std::vector<mrpt::math::TPose2D> placements;
 };
 
 struct GraphSlamResult

@@ -12,6 +12,7 @@
 #include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/ParticleRecovery.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/localization/WindowSmoother.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
 #include <map>
@@ -91,8 +92,12 @@ public:
 
     /** Weighted mean and the particles' spread (sqrt of the largest position variance). */
     mrpt::math::TPose2D mean() const;
+    /** The pose to report: with odometry, mean() refined by the `[WindowSmoother]` (as
+     *  wifi-pf-localization does offline) once it has an accepted solve; else mean(). */
+    mrpt::math::TPose2D estimate() const { return smoothed_ ? *smoothed_ : mean(); }
+    const WindowSmoother& smoother() const { return smoother_; }
     double spread_m() const;
-    /** Covariances of (x, y, φ) [m², m², rad²] of mean(). */
+    /** Covariances of (x, y, φ) [m², m², rad²] of estimate(). */
     struct Uncertainty
     {
         /** The particles' weighted covariance (MRPT's getCovarianceAndMean: the heading's
@@ -139,6 +144,8 @@ private:
     ConstantVelocityPrediction cv_{motion_};
     ParticleRecoveryOptions recoveryOptions_;
     std::optional<ParticleRecovery> recovery_;
+    WindowSmoother smoother_{WindowSmootherOptions(), TransmitterMap()};
+    std::optional<mrpt::math::TPose2D> smoothed_;
     bool areaFromInitPdf_ = false;
     double lastStepTime_ = 0;
     size_t steps_ = 0;

@@ -1,0 +1,200 @@
+/* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/core/bits_math.h>
+#include <mrpt/math/wrap2pi.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/system/CTicTac.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/WindowSmoother.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace mrpt_wifi::localization
+{
+using mrpt::math::TPose2D;
+using mrpt::poses::CPose2D;
+
+GraphSlamOptions WindowSmootherOptions::defaultGraph()
+{
+    GraphSlamOptions g;
+    g.apsKnown = true;
+    g.alignEstimatedAps = false;
+    g.threads = 1;
+    g.maxIterations = 100;
+    return g;
+}
+
+void WindowSmootherOptions::loadFromConfigFile(
+    const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+    enabled = c.read_bool(s, "enabled", enabled);
+    window_s = c.read_double(s, "window_s", window_s);
+    minWindow_s = c.read_double(s, "min_window_s", minWindow_s);
+    solvePeriod_s = c.read_double(s, "solve_period_s", solvePeriod_s);
+    maxMedianWhitenedResidual =
+        c.read_double(s, "max_median_whitened_residual", maxMedianWhitenedResidual);
+    maxFilterSpread_m = c.read_double(s, "max_filter_spread_m", maxFilterSpread_m);
+    maxRecentResidual_rad = mrpt::DEG2RAD(
+        c.read_double(s, "max_recent_residual_deg", mrpt::RAD2DEG(maxRecentResidual_rad)));
+
+    graph.nodePeriod_s = c.read_double(s, "node_period_s", graph.nodePeriod_s);
+    graph.odoScaleStd = c.read_double(s, "odometry_scale_std", graph.odoScaleStd);
+    graph.odoYawDriftStd_radPerM = mrpt::DEG2RAD(c.read_double(
+        s, "odometry_yaw_drift_deg_per_m", mrpt::RAD2DEG(graph.odoYawDriftStd_radPerM)));
+    graph.minStd_rad =
+        mrpt::DEG2RAD(c.read_double(s, "min_std_deg", mrpt::RAD2DEG(graph.minStd_rad)));
+    graph.loss = c.read_string(s, "loss", graph.loss);
+    graph.bearingDecorrelation_m =
+        c.read_double(s, "bearing_decorrelation_m", graph.bearingDecorrelation_m);
+    graph.maxIterations = c.read_int(s, "max_iterations", graph.maxIterations);
+    if (!(window_s > 0) || !(minWindow_s >= 0) || !(minWindow_s <= window_s) ||
+        !(solvePeriod_s > 0) || !(maxMedianWhitenedResidual > 0) || !(maxFilterSpread_m > 0) ||
+        !(maxRecentResidual_rad > 0) || !(graph.nodePeriod_s > 0) || !(graph.odoScaleStd >= 0) ||
+        !(graph.odoYawDriftStd_radPerM >= 0) || !(graph.minStd_rad > 0))
+        throw std::invalid_argument(
+            "[" + s +
+            "]: window_s, solve_period_s, max_median_whitened_residual, max_filter_spread_m, "
+            "max_recent_residual_deg, "
+            "node_period_s and min_std_deg must be > 0, min_window_s in [0, window_s], "
+            "odometry_scale_std and odometry_yaw_drift_deg_per_m >= 0");
+    if (graph.loss != "cauchy" && graph.loss != "huber" && graph.loss != "none")
+        throw std::invalid_argument(
+            "[" + s + "] loss = " + graph.loss + ": expected cauchy, huber or none");
+}
+
+std::string WindowSmootherOptions::asString() const
+{
+    if (!enabled) return "off";
+    std::ostringstream o;
+    o << "window " << window_s << " s, a solve every " << solvePeriod_s
+      << " s, used if the median |residual|/sigma <= " << maxMedianWhitenedResidual
+      << " and the last 2 s' median |AoA residual| <= " << mrpt::RAD2DEG(maxRecentResidual_rad)
+      << " deg";
+    return o.str();
+}
+
+WindowSmoother::WindowSmoother(const WindowSmootherOptions& options, const TransmitterMap& aps)
+    : opts_(options), aps_(aps)
+{
+    opts_.graph.apsKnown = true;
+    opts_.graph.alignEstimatedAps = false;
+}
+
+void WindowSmoother::addOdometry(double t, const TPose2D& odometry)
+{
+    if (!odometry_.empty() && t <= odometry_.back().first) return;
+    odometry_.emplace_back(t, odometry);
+}
+
+void WindowSmoother::addBearing(const BearingRecord& b)
+{
+    if (aps_.find(b.transmitter)) bearings_.push_back(b);
+}
+
+const std::pair<double, TPose2D>* WindowSmoother::odometryAt(double t) const
+{
+    const std::pair<double, TPose2D>* found = nullptr;
+    for (auto it = odometry_.rbegin(); it != odometry_.rend() && !found; ++it)
+        if (it->first <= t) found = &*it;
+    return found;
+}
+
+std::optional<TPose2D> WindowSmoother::update(
+    double t, const TPose2D& filterEstimate, double filterSpread_m)
+{
+    if (!opts_.enabled) return std::nullopt;
+    if (t < lastSolve_t_) solved_.reset(), lastSolve_t_ = -1e300;  // a new run
+    if (t - lastSolve_t_ >= opts_.solvePeriod_s - 1e-9)
+    {
+        lastSolve_t_ = t;
+        if (!solve(t, filterEstimate, filterSpread_m)) solved_.reset();
+    }
+    const auto* now = odometryAt(t);
+    if (!solved_ || !now) return std::nullopt;
+    // The newest solved node continued by the odometry since.
+    const auto& [odoNode, poseNode] = *solved_;
+    return (CPose2D(poseNode) + (CPose2D(now->second) - CPose2D(odoNode))).asTPose();
+}
+
+double WindowSmoother::recentAoaResidual(
+    const Trajectory2D& poses, const std::vector<BearingRecord>& bearings) const
+{
+    std::vector<double> residuals;
+    for (const auto& b : bearings)
+    {
+        if (!b.hasAoa || b.t < poses.t.back() - kRecent_s) continue;
+        const auto* tx = aps_.find(b.transmitter);
+        TPose2D robot;
+        if (!tx || !poses.interpolate(b.t, robot)) continue;
+        const double predicted =
+            predictAoa(sensorWorldPose(robot, b.sensorPose), tx->pose.x, tx->pose.y);
+        double r = std::abs(mrpt::math::wrapToPi(predicted - b.aoa));
+        if (b.aoaAmbiguous)
+            r = std::min(r, std::abs(mrpt::math::wrapToPi(predicted - b.aoaMirror)));
+        residuals.push_back(r);
+    }
+    if (residuals.empty()) return 0;  // nothing recent to check against
+    auto mid = residuals.begin() + long(residuals.size() / 2);
+    std::nth_element(residuals.begin(), mid, residuals.end());
+    return *mid;
+}
+
+bool WindowSmoother::solve(double t, const TPose2D& filterEstimate, double filterSpread_m)
+{
+    const double t0 = t - opts_.window_s;
+    while (!odometry_.empty() && odometry_.front().first < t0 - 1) odometry_.pop_front();
+    while (!bearings_.empty() && bearings_.front().t < t0 - 1) bearings_.pop_front();
+
+    GraphSlamInput in;
+    for (const auto& [to, p] : odometry_)
+        if (to >= t0 && to <= t) in.odometry.push_back(to, p);
+    if (in.odometry.size() < 2 || in.odometry.t.back() - in.odometry.t.front() < opts_.minWindow_s)
+        return false;
+    for (const auto& b : bearings_)
+        if (b.t >= in.odometry.t.front() && b.t <= in.odometry.t.back()) in.bearings.push_back(b);
+    if (in.bearings.empty()) return false;
+    in.aps = aps_;
+
+    // Starts: the odometry frame placed so that its newest reading is at the filter's
+    // estimate, and the previous solve continued.
+    const CPose2D odoLast(in.odometry.poses.back());
+    if (filterSpread_m <= opts_.maxFilterSpread_m)
+        in.placements.push_back((CPose2D(filterEstimate) + (-odoLast)).asTPose());
+    if (solved_)
+        in.placements.push_back((CPose2D(solved_->second) + (-CPose2D(solved_->first))).asTPose());
+    if (in.placements.empty()) return false;
+
+    mrpt::system::CTicTac timer;
+    GraphSlamResult r;
+    try
+    {
+        r = solveBearingGraph(in, opts_.graph);
+    }
+    catch (const std::runtime_error&)
+    {
+        return false;  // too little in the window: the filter's estimate stands
+    }
+    ++solves_;
+    solveTime_s_ += timer.Tac();
+    if (r.poses.empty() || !(r.medianWhitenedResidual <= opts_.maxMedianWhitenedResidual))
+        return false;
+    // A window that holds a kidnapping is solved across it, the graph bending its odometry
+    // over several edges, with the window's residuals hardly grown: the newest bearings, which
+    // the newest pose must explain, tell. The graph would bend on for as long as the window
+    // holds the jump (the newest residuals shrink while the pose stays off), so the smoother
+    // forgets what came before and starts over.
+    if (!(recentAoaResidual(r.poses, in.bearings) <= opts_.maxRecentResidual_rad))
+    {
+        ++restarts_;
+        while (odometry_.size() > 1 && odometry_[1].first <= t) odometry_.pop_front();
+        while (!bearings_.empty() && bearings_.front().t < t) bearings_.pop_front();
+        return false;
+    }
+    ++accepted_;
+    solved_.emplace(in.odometry.poses.back(), r.poses.poses.back());
+    return true;
+}
+
+}  // namespace mrpt_wifi::localization
