@@ -384,6 +384,8 @@ int main(int argc, char** argv)
             WindowSmootherOptions smootherOptions;
             smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
             if (odo.empty()) smootherOptions.enabled = false;  // its graph needs odometry
+            smootherOptions.graph.useAoa = wifiMap->likelihoodOptions.use.aoa;
+            smootherOptions.graph.useAod = wifiMap->likelihoodOptions.use.aod;
             if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
                 std::cerr << "warning: [ParticleRecovery] needs the map's area (min_x ... max_y "
                              "in its creationOpts, or an init_PDF box): off\n";

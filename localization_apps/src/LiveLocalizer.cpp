@@ -110,6 +110,8 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     recovery_.emplace(recoveryOptions_, wifiMap_.get());
     WindowSmootherOptions smootherOptions;
     smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
+    smootherOptions.graph.useAoa = wifiMap_->likelihoodOptions.use.aoa;
+    smootherOptions.graph.useAod = wifiMap_->likelihoodOptions.use.aod;
     smoother_ = WindowSmoother(smootherOptions, wifiMap_->transmitters());
 
     const std::string sect = "LocalizationExperiment";

@@ -84,13 +84,23 @@ WindowSmoother::WindowSmoother(const WindowSmootherOptions& options, const Trans
 
 void WindowSmoother::addOdometry(double t, const TPose2D& odometry)
 {
-    if (!odometry_.empty() && t <= odometry_.back().first) return;
+    if (!opts_.enabled || (!odometry_.empty() && t <= odometry_.back().first)) return;
     odometry_.emplace_back(t, odometry);
+    forgetBefore(t - opts_.window_s - 1);
 }
 
 void WindowSmoother::addBearing(const BearingRecord& b)
 {
-    if (aps_.find(b.transmitter)) bearings_.push_back(b);
+    if (!opts_.enabled || !aps_.find(b.transmitter)) return;
+    bearings_.push_back(b);
+    forgetBefore(b.t - opts_.window_s - 1);
+}
+
+void WindowSmoother::forgetBefore(double t)
+{
+    // Keeps memory bounded also while update() is not called (no odometry yet, live).
+    while (odometry_.size() > 1 && odometry_[1].first <= t) odometry_.pop_front();
+    while (!bearings_.empty() && bearings_.front().t < t) bearings_.pop_front();
 }
 
 const std::pair<double, TPose2D>* WindowSmoother::odometryAt(double t) const
@@ -144,8 +154,6 @@ double WindowSmoother::recentAoaResidual(
 bool WindowSmoother::solve(double t, const TPose2D& filterEstimate, double filterSpread_m)
 {
     const double t0 = t - opts_.window_s;
-    while (!odometry_.empty() && odometry_.front().first < t0 - 1) odometry_.pop_front();
-    while (!bearings_.empty() && bearings_.front().t < t0 - 1) bearings_.pop_front();
 
     GraphSlamInput in;
     for (const auto& [to, p] : odometry_)
@@ -188,8 +196,7 @@ bool WindowSmoother::solve(double t, const TPose2D& filterEstimate, double filte
     if (!(recentAoaResidual(r.poses, in.bearings) <= opts_.maxRecentResidual_rad))
     {
         ++restarts_;
-        while (odometry_.size() > 1 && odometry_[1].first <= t) odometry_.pop_front();
-        while (!bearings_.empty() && bearings_.front().t < t) bearings_.pop_front();
+        forgetBefore(t);
         return false;
     }
     ++accepted_;

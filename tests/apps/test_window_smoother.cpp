@@ -144,11 +144,24 @@ TEST(WindowSmoother, NothingBeforeMinWindowAndWhenDisabled)
             return truth;
         });
     EXPECT_GT(early.accepted(), 0u);
+    // Without odometry (live, before the first reading) update() is never called: the
+    // bearings kept stay within the window, however long the robot drives.
+    WindowSmoother noOdometry(WindowSmootherOptions(), w.aps);
+    size_t perSecond = 0;
+    for (const auto& b : w.bearings)
+    {
+        noOdometry.addBearing(b);
+        perSecond += b.t < t0 + 1;
+    }
+    EXPECT_LE(
+        noOdometry.bufferedBearings(), size_t(perSecond * (noOdometry.options().window_s + 2)));
+    EXPECT_GT(noOdometry.bufferedBearings(), 0u);
     o.enabled = false;
     WindowSmoother off(o, w.aps);
     EXPECT_TRUE(
         replay(w, w.odometry, off, [](double, const auto& p) { return p; }).smoothedErrors.empty());
     EXPECT_EQ(off.solves(), 0u);
+    EXPECT_EQ(off.bufferedBearings(), 0u);
 }
 
 TEST(WindowSmoother, ConfigErrorsNameTheKey)

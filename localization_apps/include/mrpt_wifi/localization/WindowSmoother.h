@@ -38,7 +38,9 @@ struct WindowSmootherOptions
     double maxRecentResidual_rad = 8 * M_PI / 180;
     /** The window's graph: odometry edges, systematic odometry errors and bearing edges as
      *  wifi-graphslam --aps builds them (its defaults; node_period_s, odometry_scale_std,
-     *  odometry_yaw_drift_deg_per_m, min_std_deg, loss). */
+     *  odometry_yaw_drift_deg_per_m, min_std_deg, loss, bearing_decorrelation_m,
+     *  max_iterations). Which angles it uses (useAoa, useAod) the apps set from the map's
+     *  likelihood options, so the smoother trusts what the filter trusts. */
     GraphSlamOptions graph = defaultGraph();
 
     static GraphSlamOptions defaultGraph();
@@ -70,7 +72,8 @@ public:
 
     const WindowSmootherOptions& options() const { return opts_; }
 
-    /** Odometry readings in time order (older or equal times are dropped). */
+    /** Odometry readings in time order (older or equal times are dropped). Both add* keep only
+     *  the last window_s (+ 1 s) of data; nothing while disabled. */
     void addOdometry(double t, const mrpt::math::TPose2D& odometry);
     /** Bearings of transmitters not in the map are ignored. */
     void addBearing(const BearingRecord& b);
@@ -82,6 +85,8 @@ public:
         double t, const mrpt::math::TPose2D& filterEstimate, double filterSpread_m);
 
     size_t solves() const { return solves_; }
+    /** Bearings kept for the next window. */
+    size_t bufferedBearings() const { return bearings_.size(); }
     size_t accepted() const { return accepted_; }
     /** Solves whose newest bearings the newest pose did not explain (max_recent_residual_deg). */
     size_t restarts() const { return restarts_; }
@@ -93,6 +98,9 @@ private:
     double recentAoaResidual(
         const Trajectory2D& poses, const std::vector<BearingRecord>& bearings) const;
     static constexpr double kRecent_s = 2.0;
+    /** Drops the bearings before t and the odometry readings before the last one at or
+     *  before t. */
+    void forgetBefore(double t);
     /** The newest odometry reading at or before t. */
     const std::pair<double, mrpt::math::TPose2D>* odometryAt(double t) const;
 
