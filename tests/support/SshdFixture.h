@@ -9,26 +9,52 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <random>
 #include <thread>
 
 #include "TestSupport.h"
 
 namespace mrpt_wifi::test
 {
-/** A free TCP port on 127.0.0.1 (bind to 0, read it back, close). */
+/** A free port of `type` on 127.0.0.1, below the kernel's ephemeral range: a port the kernel
+ *  hands out (bind to 0) is free only until the next socket of any process asks for one, and a
+ *  test's emulator sends from such sockets, so the program that binds it later could find it
+ *  taken. A random port under the range (checked by binding it) is never handed out; bind to 0
+ *  is the fallback. */
 inline uint16_t freeLoopbackPort(int type = SOCK_STREAM)
 {
-    const int fd = ::socket(AF_INET, type, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a));
-    socklen_t len = sizeof(a);
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-    ::close(fd);
-    return ntohs(a.sin_port);
+    const auto tryBind = [type](uint16_t port) -> uint16_t
+    {
+        const int fd = ::socket(AF_INET, type, 0);
+        if (fd < 0) return 0;
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        a.sin_port = htons(port);
+        uint16_t got = 0;
+        if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0)
+        {
+            socklen_t len = sizeof(a);
+            ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+            got = ntohs(a.sin_port);
+        }
+        ::close(fd);
+        return got;
+    };
+    int ephemeralLow = 32768;
+    std::ifstream("/proc/sys/net/ipv4/ip_local_port_range") >> ephemeralLow;
+    const int low = 10000, high = std::min(ephemeralLow, 65536) - 1;
+    if (high > low)
+    {
+        std::mt19937 rng(std::random_device{}());
+        std::uniform_int_distribution<int> pick(low, high);
+        for (int attempt = 0; attempt < 200; ++attempt)
+            if (const uint16_t p = tryBind(uint16_t(pick(rng)))) return p;
+    }
+    return tryBind(0);
 }
 
 /** Debian's sshd on 127.0.0.1 with a temporary host key and one authorised client key, for
