@@ -495,7 +495,7 @@ int main(int argc, char** argv)
                         smoother.addOdometry(odo.t[io], odo.poses[io]);
                     for (; ib < inTime.size() && inTime[ib].t <= t; ++ib)
                         smoother.addBearing(inTime[ib]);
-                    if (const auto p = smoother.update(t, est.poses[i], 0.0))
+                    if (const auto p = smoother.update(t, est.poses[i], [] { return 0.0; }))
                         est.poses[i] = *p, ++refined;
                 }
             }

@@ -206,7 +206,7 @@ bool LiveLocalizer::step()
             heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
         }
         sensorOnRobot_ = mrpt::poses::CPose2D(b.sensorPose).asTPose();
-        smoother_.addBearing(recordFromObservation(b));
+        if (smoother_.options().enabled) smoother_.addBearing(recordFromObservation(b));
     }
     if (const double f = recovery_->reseedFraction(t, dt); f > 0)
         act = withReseeding(act, f, recovery_->reseedRadius_m());
@@ -217,7 +217,7 @@ bool LiveLocalizer::step()
     if (!lastOdo_) cv_.addEstimate(t, estimate);
     recovery_->setEstimate(estimate);
     smoothed_.reset();
-    if (lastOdo_) smoothed_ = smoother_.update(t, estimate, spread_m());
+    if (lastOdo_) smoothed_ = smoother_.update(t, estimate, [this] { return spread_m(); });
     lastStepTime_ = t;
     ++steps_;
     bearingsUsed_ += n;

@@ -18,9 +18,7 @@ using mrpt::poses::CPose2D;
 
 GraphSlamOptions WindowSmootherOptions::defaultGraph()
 {
-    GraphSlamOptions g;
-    g.apsKnown = true;
-    g.alignEstimatedAps = false;
+    GraphSlamOptions g;  // apsKnown and no estimated-AP start: the constructor sets them
     g.threads = 1;
     g.maxIterations = 100;
     return g;
@@ -112,7 +110,7 @@ const std::pair<double, TPose2D>* WindowSmoother::odometryAt(double t) const
 }
 
 std::optional<TPose2D> WindowSmoother::update(
-    double t, const TPose2D& filterEstimate, double filterSpread_m)
+    double t, const TPose2D& filterEstimate, const std::function<double()>& filterSpread_m)
 {
     if (!opts_.enabled) return std::nullopt;
     if (t < lastSolve_t_) solved_.reset(), lastSolve_t_ = -1e300;  // a new run
@@ -151,7 +149,8 @@ double WindowSmoother::recentAoaResidual(
     return *mid;
 }
 
-bool WindowSmoother::solve(double t, const TPose2D& filterEstimate, double filterSpread_m)
+bool WindowSmoother::solve(
+    double t, const TPose2D& filterEstimate, const std::function<double()>& filterSpread_m)
 {
     const double t0 = t - opts_.window_s;
 
@@ -168,7 +167,7 @@ bool WindowSmoother::solve(double t, const TPose2D& filterEstimate, double filte
     // Starts: the odometry frame placed so that its newest reading is at the filter's
     // estimate, and the previous solve continued.
     const CPose2D odoLast(in.odometry.poses.back());
-    if (filterSpread_m <= opts_.maxFilterSpread_m)
+    if (filterSpread_m() <= opts_.maxFilterSpread_m)
         in.placements.push_back((CPose2D(filterEstimate) + (-odoLast)).asTPose());
     if (solved_)
         in.placements.push_back((CPose2D(solved_->second) + (-CPose2D(solved_->first))).asTPose());

@@ -59,7 +59,7 @@ Replay replay(
         if (!w.truth.interpolate(b.t, truth)) continue;
         const auto filter = filterAt(b.t, truth);
         ++r.estimates;
-        const auto s = smoother.update(b.t, filter, 0.3);
+        const auto s = smoother.update(b.t, filter, [] { return 0.3; });
         if (!s) continue;
         r.filterErrors.push_back(std::hypot(filter.x - truth.x, filter.y - truth.y));
         r.smoothedErrors.push_back(std::hypot(s->x - truth.x, s->y - truth.y));

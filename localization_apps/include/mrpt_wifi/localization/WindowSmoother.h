@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -79,10 +80,12 @@ public:
     void addBearing(const BearingRecord& b);
 
     /** The smoothed pose at `t` (solving if solve_period_s has passed since the last solve),
-     *  given the filter's estimate and its spread [m] at `t`; nullopt while there is no
-     *  accepted solve (then the filter's estimate stands). */
+     *  given the filter's estimate at `t` and its spread [m], asked for only when a solve is
+     *  due (a pass over the particles); nullopt while there is no accepted solve (then the
+     *  filter's estimate stands). */
     std::optional<mrpt::math::TPose2D> update(
-        double t, const mrpt::math::TPose2D& filterEstimate, double filterSpread_m);
+        double t, const mrpt::math::TPose2D& filterEstimate,
+        const std::function<double()>& filterSpread_m);
 
     size_t solves() const { return solves_; }
     /** Bearings kept for the next window. */
@@ -93,7 +96,9 @@ public:
     double solveTime_s() const { return solveTime_s_; }
 
 private:
-    bool solve(double t, const mrpt::math::TPose2D& filterEstimate, double filterSpread_m);
+    bool solve(
+        double t, const mrpt::math::TPose2D& filterEstimate,
+        const std::function<double()>& filterSpread_m);
     /** Median |AoA residual| [rad] of the bearings of the last kRecent_s of `poses`; 0 if none. */
     double recentAoaResidual(
         const Trajectory2D& poses, const std::vector<BearingRecord>& bearings) const;
