@@ -127,6 +127,11 @@ std::unique_ptr<bearing::BearingProcessor> makeFallbackProcessor(
             "[wifi-localize] bearing_algorithm is set: bearing_array (the receive array YAML) is "
             "needed too");
     auto est = bearing::createEstimator(algo);
+    if (est->syntheticAperture())
+        throw std::invalid_argument(
+            "[wifi-localize] bearing_algorithm = " + algo +
+            ": a synthetic aperture needs the peers' recordings of this robot; bearings from it "
+            "come from csi-bearings or wifi-sar (their rawlog then goes to wifi-pf-localization)");
     est->options().keepProfile = keepProfile;
     CalibrationStore calib;
     if (const auto c = path("bearing_calibration"); !c.empty()) calib = CalibrationStore::open(c);

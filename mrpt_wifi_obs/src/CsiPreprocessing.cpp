@@ -353,7 +353,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
 {
     if (in.rssi_dBm != 0 && in.rssi_dBm < options_.minRssi_dBm) return RejectReason::LowRssi;
     if (in.nRx > rxArray_.size()) return RejectReason::ArrayMismatch;
-    if (in.nRx < 2) return RejectReason::SingleAntenna;
+    if (in.nRx < 2 && !options_.acceptSingleAntenna) return RejectReason::SingleAntenna;
     const unsigned nRx = in.nRx;
     const unsigned nfft = in.nfft();
     const unsigned bw = in.chanspec.bandwidthMHz;
@@ -399,6 +399,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     out.sensorPose = in.sensorPose;
     out.rssi_dBm = in.rssi_dBm;
     out.sequenceNumber = in.sequenceNumber;
+    out.frameCounter = in.firmwareCounter;
     out.nRx = nRx;
     out.nTx = unsigned(out.streamIndex.size());
     out.layout = cache.layout;

@@ -80,8 +80,18 @@ std::unique_ptr<bearing::BearingProcessor> makeLiveBearingProcessor(const LiveBe
     if (inlineOptions)
         params = forKey(
             "bearing_options", [&] { return mrpt::containers::yaml::FromText(s.optionsFile); });
-    auto estimator =
-        forKey("bearing_algorithm", [&] { return bearing::createEstimator(s.algorithm, params); });
+    auto estimator = forKey(
+        "bearing_algorithm",
+        [&]
+        {
+            auto e = bearing::createEstimator(s.algorithm, params);
+            if (e->syntheticAperture())
+                throw std::invalid_argument(
+                    "'" + s.algorithm +
+                    "' needs the peers' recordings of this robot and its odometry, which the "
+                    "live sensor does not have: run csi-bearings on the merged rawlog");
+            return e;
+        });
     const std::string arrayPath = s.arrayFile.empty() ? defaultArrayFile() : s.arrayFile;
     AntennaArray rxArray =
         forKey("bearing_array", [&] { return AntennaArray::fromYamlFile(arrayPath); });

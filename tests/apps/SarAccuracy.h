@@ -10,11 +10,13 @@
 // given RMS (a tracking camera's), against the true azimuth from the start.
 #include <mrpt/core/bits_math.h>
 #include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 #include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
 #include <mrpt_wifi/sim/PacketExchange.h>
 #include <mrpt_wifi/sim/RandomRoom.h>
 
 #include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -33,10 +35,13 @@ struct RoomResult
     std::vector<PeerResult> peers;
 };
 
-/** One room: `positionErrorRms_m` > 0 adds a smooth error to the positions the estimator sees. */
+/** One room: `positionErrorRms_m` > 0 adds a smooth error to the positions the estimator sees.
+ *  `viaBearingChain`: through the registered estimator `sar` in a BearingProcessor (both
+ *  recordings and odometry fed as csi-bearings feeds a rawlog; the error of the last bearing,
+ *  from the robot's pose at its frame) instead of wifi-sar's chain. */
 inline RoomResult runRoom(
     uint32_t seed, const std::string& arraysDir, double positionErrorRms_m = 0,
-    double positionStd_m = 0)
+    double positionStd_m = 0, bool viaBearingChain = false)
 {
     sim::RandomRoomOptions ro;
     ro.arraysDir = arraysDir;
@@ -82,6 +87,55 @@ inline RoomResult runRoom(
     sim::ExchangeOptions eo;
     const auto rec = sim::simulateExchanges(
         channel, moverAt, t0, t0 + still + arcTime, moverMac, peers, eo, seed);
+    if (viaBearingChain)
+    {
+        // Odometry: the positions the estimator sees, with a constant heading (the bearing
+        // comes out in the robot's frame, so the heading must be undone below).
+        constexpr double kHeading = 0.3;
+        bearing::BearingProcessor::Options po;
+        for (size_t m = 0; m < peers.size(); ++m)
+        {
+            po.peerRecordings["PEER" + std::to_string(m)] = peers[m].mac;
+            for (const auto& f : rec.heardByPeer[m]) f->sensorLabel = "PEER" + std::to_string(m);
+        }
+        mrpt::containers::yaml params = mrpt::containers::yaml::Map();
+        params["position_std_m"] = positionStd_m;
+        bearing::BearingProcessor proc(
+            CsiPreprocessor(PreprocessOptions(), AntennaArray::singleElement()),
+            bearing::createEstimator("sar", params), po);
+        for (const auto& peer : rec.heardByPeer)
+            for (const auto& f : peer) proc.process(*f);
+        std::map<MacAddress, CObservationWiFiBearing::Ptr> last;
+        double nextOdometry = t0;
+        for (const auto& f : rec.heardByMover)
+        {
+            const double t = mrpt::Clock::toDouble(f->timestamp);
+            for (; nextOdometry <= t + 0.1; nextOdometry += 0.02)
+            {
+                const auto p = seenAt(nextOdometry);
+                proc.addOdometry(
+                    mrpt::Clock::fromDouble(nextOdometry), mrpt::math::TPose2D(p.x, p.y, kHeading));
+            }
+            if (auto b = proc.process(*f)) last[f->transmitter] = b;
+        }
+        for (const auto& peer : peers)
+        {
+            PeerResult r;
+            if (const auto it = last.find(peer.mac); it != last.end())
+            {
+                const auto s = moverAt(mrpt::Clock::toDouble(it->second->timestamp));
+                const double truth = std::atan2(peer.position.y - s.y, peer.position.x - s.x);
+                r.estimated = true;
+                r.error_deg =
+                    mrpt::RAD2DEG(std::remainder(it->second->aoa_rad + kHeading - truth, 2 * M_PI));
+                r.std_deg = mrpt::RAD2DEG(it->second->aoaStd_rad);
+                r.quality = it->second->quality;
+                r.range_m = (peer.position - s).norm();
+            }
+            room.peers.push_back(r);
+        }
+        return room;
+    }
     sar::SarOptions so;
     so.carrier_Hz = eo.chanspec.centerFrequencyHz();
     so.positionStd_m = positionStd_m;

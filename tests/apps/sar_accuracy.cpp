@@ -1,7 +1,8 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.
  *
  * sar-accuracy: synthetic-aperture bearings (wifi-sar's chain) over random rooms of the
- * simulator, development seeds 1.. or evaluation seeds 1000.. (SarAccuracy.h says what a room
+ * simulator (or the registered estimator `sar` in a BearingProcessor, --bearing-chain),
+ * development seeds 1.. or evaluation seeds 1000.. (SarAccuracy.h says what a room
  * is). Per room the three peers' errors, then the summary the README's table quotes. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt_wifi/obs/CommandLine.h>
@@ -32,6 +33,12 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<double> argPosStd(
                 "", "position-std", "The estimator's SarOptions::positionStd_m [m]", false, 0.0,
                 "M", cmd);
+            TCLAP::SwitchArg argChain(
+                "", "bearing-chain",
+                "Through the registered estimator 'sar' in a BearingProcessor (as csi-bearings "
+                "runs it on a rawlog with both recordings and odometry; the last bearing per peer, "
+                "from the pose of its frame) instead of wifi-sar's chain",
+                cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
                 return rc;
@@ -44,7 +51,7 @@ int main(int argc, char** argv)
             {
                 const auto room = sartest::runRoom(
                     first + i, std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays",
-                    argPosErr.getValue(), argPosStd.getValue());
+                    argPosErr.getValue(), argPosStd.getValue(), argChain.getValue());
                 std::printf("%4u  %4.1f x %4.1f ", room.seed, room.width, room.height);
                 double worst = 0;
                 for (const auto& p : room.peers)

@@ -315,12 +315,12 @@ int main(int argc, char** argv)
     if (rooms > 0)
     {
         if (algos.empty())
-            for (const auto& n : bearing::estimatorNames())
+            for (const auto& n : bearing::arrayEstimatorNames())
                 if (n != "aod") algos.push_back(n);
         return roomTables(
             rooms, !development, estimates, snrs, algos, params, windowFrames, receiver);
     }
-    const auto names = bearing::estimatorNames();
+    const auto names = bearing::arrayEstimatorNames();
     std::cout << std::fixed << std::setprecision(2);
     std::cout
         << "# AoA accuracy, scenario `bearing` (3 APs, rt-ac86u linear array, 80 MHz), "

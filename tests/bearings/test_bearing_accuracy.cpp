@@ -34,7 +34,7 @@ TEST(BearingAccuracy, CalibratedModerateMultipathBestMedianWithinTwoDegrees)
     const auto d = dataset("bearing", Environment::Moderate, 20, true);
     double best = INFINITY;
     std::string bestName;
-    for (const auto& n : bearing::estimatorNames())
+    for (const auto& n : bearing::arrayEstimatorNames())
     {
         const AccuracyStats s = evaluate(d, n);
         ASSERT_GE(s.count, 140u) << n;
@@ -80,7 +80,7 @@ TEST(BearingAccuracy, UncalibratedIsFarWorseForTheRecord)
 {
     const auto d = dataset("bearing", Environment::Moderate, 20, false);
     double best = INFINITY;
-    for (const auto& n : bearing::estimatorNames())
+    for (const auto& n : bearing::arrayEstimatorNames())
         best = std::min(best, evaluate(d, n).median_deg);
     std::cout << "uncalibrated best median " << best << " deg\n";
     EXPECT_GT(best, 10.0);

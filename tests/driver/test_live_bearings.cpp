@@ -212,6 +212,10 @@ TEST(LiveBearingWorker, ConfigurationErrorsNameTheKey)
     EXPECT_NE(e.find("section 'CSI'"), std::string::npos) << e;
     EXPECT_NE(e.find("key 'bearing_algorithm'"), std::string::npos) << e;
     EXPECT_NE(e.find("no_such_estimator"), std::string::npos) << e;
+    // The synthetic aperture needs a peer's recording the live sensor never has.
+    e = configError("bearing_algorithm = sar\n");
+    EXPECT_NE(e.find("key 'bearing_algorithm'"), std::string::npos) << e;
+    EXPECT_NE(e.find("csi-bearings"), std::string::npos) << e;
 
     e = configError("bearing_algorithm = aoa_only\nbearing_calibration = /nonexistent/calib\n");
     EXPECT_NE(e.find("key 'bearing_calibration'"), std::string::npos) << e;

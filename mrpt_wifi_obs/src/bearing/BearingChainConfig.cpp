@@ -16,8 +16,9 @@ BearingChainConfig loadBearingChainConfig(const std::string& path, const std::st
     for (const auto& kv : doc.asMap())
     {
         const std::string k = kv.first.as<std::string>();
-        if (k != "preprocess" && k != "window" && k != "estimators")
-            bad("unknown section '" + k + "' (expected preprocess, window, estimators)");
+        if (k != "preprocess" && k != "window" && k != "estimators" && k != "synthetic_aperture")
+            bad("unknown section '" + k +
+                "' (expected preprocess, window, estimators, synthetic_aperture)");
     }
     if (doc.has("preprocess"))
         for (const auto& kv : doc["preprocess"].asMap())
@@ -55,6 +56,37 @@ BearingChainConfig loadBearingChainConfig(const std::string& path, const std::st
                 c.window.stride = std::max(1u, kv.second.as<unsigned>());
             else
                 bad("unknown window option '" + k + "'");
+        }
+    if (doc.has("synthetic_aperture"))
+        for (const auto& kv : doc["synthetic_aperture"].asMap())
+        {
+            const std::string k = kv.first.as<std::string>();
+            if (k == "interval_s")
+            {
+                c.window.apertureInterval_s = kv.second.as<double>();
+                if (!(c.window.apertureInterval_s >= 0))
+                    bad("synthetic_aperture.interval_s must be >= 0");
+            }
+            else if (k == "peers")
+            {
+                if (!kv.second.isMap())
+                    bad("synthetic_aperture.peers must map sensor labels to MAC addresses");
+                for (const auto& peer : kv.second.asMap())
+                {
+                    const std::string label = peer.first.as<std::string>();
+                    const std::string mac = peer.second.as<std::string>();
+                    try
+                    {
+                        c.window.peerRecordings[label] = MacAddress::fromString(mac);
+                    }
+                    catch (const std::exception& e)
+                    {
+                        bad("synthetic_aperture.peers." + label + ": " + e.what());
+                    }
+                }
+            }
+            else
+                bad("unknown synthetic_aperture option '" + k + "' (expected peers, interval_s)");
         }
     if (doc.has("estimators") && doc["estimators"].has(algo))
         c.estimatorParams = doc["estimators"][algo];

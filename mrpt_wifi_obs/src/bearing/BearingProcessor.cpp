@@ -1,5 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/math/wrap2pi.h>
+#include <mrpt/poses/CPose2D.h>
+#include <mrpt/poses/CPose3D.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include <algorithm>
@@ -22,16 +24,42 @@ struct BearingProcessor::CandidateScan
     Eigen::VectorXd spec;
 };
 
+namespace
+{
+/** A synthetic aperture needs each frame's absolute phase (the forward × reverse product
+ *  carries the propagation phase) and the received amplitudes (its weights). */
+CsiPreprocessor forEstimator(CsiPreprocessor pre, const BearingEstimator* est)
+{
+    if (!est || !est->syntheticAperture()) return pre;
+    PreprocessOptions o = pre.options();
+    if (!o.removeSamplingTimeOffset && !o.normalizePower && o.acceptSingleAntenna) return pre;
+    o.removeSamplingTimeOffset = false;
+    o.normalizePower = false;
+    o.acceptSingleAntenna = true;
+    return CsiPreprocessor(o, pre.rxArray(), pre.calibration());
+}
+
+BearingProcessor::Options forEstimator(BearingProcessor::Options o, const BearingEstimator* est)
+{
+    if (!est || !est->syntheticAperture()) return o;
+    o.windowCapacity = std::max(o.windowCapacity, est->framesWanted());
+    o.windowMaxAge_s = std::max(o.windowMaxAge_s, est->windowSpan_s());
+    o.odometryHistory_s = std::max(o.odometryHistory_s, est->windowSpan_s() + 1.0);
+    o.tracking = false;  // one estimate per aperture: nothing for a track to choose between
+    return o;
+}
+}  // namespace
+
 BearingProcessor::BearingProcessor(
     CsiPreprocessor preprocessor, std::unique_ptr<BearingEstimator> estimator, Options options)
-    : pre_(std::move(preprocessor)),
+    : pre_(forEstimator(std::move(preprocessor), estimator.get())),
       est_(std::move(estimator)),
-      opts_(options),
+      opts_(forEstimator(std::move(options), est_.get())),
       windows_(
-          std::max(options.windowCapacity, est_ ? est_->framesWanted() : 1),
-          options.windowMaxAge_s),
-      tracking_(options.tracking.value_or(est_ && est_->name() == "default")),
-      tracker_(options.tracker),
+          std::max(opts_.windowCapacity, est_ ? est_->framesWanted() : 1), opts_.windowMaxAge_s),
+      peerWindows_(opts_.windowCapacity, opts_.windowMaxAge_s),
+      tracking_(opts_.tracking.value_or(est_ && est_->name() == "default")),
+      tracker_(opts_.tracker),
       scan_(std::make_unique<CandidateScan>())
 {
 }
@@ -174,6 +202,15 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
 {
     lastFrame_ = nullptr;
     lastResult_ = BearingResult();
+    if (const auto peer = opts_.peerRecordings.find(csi.sensorLabel);
+        peer != opts_.peerRecordings.end())
+    {
+        CsiWindow& window = peerWindows_.of(peer->second);
+        const RejectReason r = pre_.process(csi, window.slot());
+        if (reason) *reason = r;
+        if (r == RejectReason::Accepted) window.commit();
+        return nullptr;
+    }
     CsiWindow& window = windows_.of(csi.transmitter);
     CleanCsi& slot = window.slot();
     const RejectReason r = pre_.process(csi, slot);
@@ -182,15 +219,42 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     window.commit();
     lastFrame_ = &window.newest();
 
-    unsigned& since = sinceLast_[csi.transmitter];
-    if (++since < opts_.stride) return nullptr;
-    since = 0;
-
-    window.recent(est_->framesWanted(), frames_);
-    limitWindowByMotion();
     EstimatorContext ctx;
     ctx.rxArray = &pre_.rxArray();
     ctx.txArrayOf = [this](const MacAddress& m) { return txArrayOf(m); };
+    if (est_->syntheticAperture())
+    {
+        // Each estimate spans seconds of motion: one per interval, from the whole window.
+        const double now = mrpt::Clock::toDouble(csi.timestamp);
+        const auto last = lastAperture_.find(csi.transmitter);
+        if (last != lastAperture_.end() && now - last->second < opts_.apertureInterval_s &&
+            now >= last->second)
+            return nullptr;
+        lastAperture_[csi.transmitter] = now;
+        window.recent(est_->framesWanted(), frames_);
+        ctx.peerRecordingOf = [this](const MacAddress& peer)
+        {
+            std::vector<const CleanCsi*> out;
+            peerWindows_.of(peer).recent(est_->framesWanted(), out);
+            return out;
+        };
+        const mrpt::poses::CPose2D antenna(csi.sensorPose);
+        ctx.antennaPoseAt =
+            [this, antenna](mrpt::Clock::time_point t) -> std::optional<mrpt::math::TPose2D>
+        {
+            const auto robot = odometryAt(t);
+            if (!robot) return std::nullopt;
+            return (mrpt::poses::CPose2D(*robot) + antenna).asTPose();
+        };
+    }
+    else
+    {
+        unsigned& since = sinceLast_[csi.transmitter];
+        if (++since < opts_.stride) return nullptr;
+        since = 0;
+        window.recent(est_->framesWanted(), frames_);
+        limitWindowByMotion();
+    }
     if (!est_->estimate(frames_, ctx, lastResult_) || !lastResult_.valid) return nullptr;
     lastDecision_ = BearingTracker::Decision();
     if (tracking_) track(csi);

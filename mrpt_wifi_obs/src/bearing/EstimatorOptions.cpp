@@ -116,6 +116,31 @@ void EstimatorOptions::load(
             directPathPowerRatio = read<double>(v, key, who);
             requireRange(directPathPowerRatio, 0, 1, key, who);
         }
+        else if (key == "aperture_s")
+        {
+            aperture_s = read<double>(v, key, who);
+            requireRange(aperture_s, 0.1, 600, key, who);
+        }
+        else if (key == "min_aperture_m")
+        {
+            minAperture_m = read<double>(v, key, who);
+            requireRange(minAperture_m, 0.01, 100, key, who);
+        }
+        else if (key == "position_std_m")
+        {
+            positionStd_m = read<double>(v, key, who);
+            requireRange(positionStd_m, 0, 10, key, who);
+        }
+        else if (key == "mover_chain")
+        {
+            moverChain = read<unsigned>(v, key, who);
+            requireRange(moverChain, 0, 7, key, who);
+        }
+        else if (key == "peer_chain")
+        {
+            peerChain = read<unsigned>(v, key, who);
+            requireRange(peerChain, 0, 7, key, who);
+        }
         else if (key == "aod_method")
         {
             aodMethod = read<std::string>(v, key, who);

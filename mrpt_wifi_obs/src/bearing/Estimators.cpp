@@ -8,6 +8,7 @@
  * the symmetric band) and their bearing is then polished with the grouped wideband model. */
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/obs/bearing/BearingEstimator.h>
+#include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
@@ -1116,9 +1117,16 @@ private:
 
 }  // namespace
 
-std::vector<std::string> estimatorNames()
+std::vector<std::string> arrayEstimatorNames()
 {
     return {"default", "aoa_only", "fft", "svd", "music", "spotfi", "aod", "esprit"};
+}
+
+std::vector<std::string> estimatorNames()
+{
+    auto names = arrayEstimatorNames();
+    names.push_back("sar");
+    return names;
 }
 
 std::unique_ptr<BearingEstimator> createEstimator(
@@ -1141,6 +1149,8 @@ std::unique_ptr<BearingEstimator> createEstimator(
         e = std::make_unique<AodEstimator>();
     else if (name == "esprit")
         e = std::make_unique<EspritEstimator>();
+    else if (name == "sar")
+        e = std::make_unique<sar::SyntheticApertureEstimator>();
     else
     {
         std::string list;

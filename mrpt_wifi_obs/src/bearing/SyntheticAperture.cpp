@@ -29,6 +29,44 @@ bool chainValues(
 }
 }  // namespace
 
+namespace
+{
+/** Forward × reverse at the subcarriers `ks` (ascending), the product's delay slope removed,
+ *  summed coherently (combinedProduct()). */
+template <class ValueA, class ValueB>
+std::optional<std::complex<double>> productOverSubcarriers(
+    const std::vector<int>& ks, const ValueA& a, const ValueB& b, std::string* why)
+{
+    std::vector<std::complex<double>> p(ks.size());
+    for (size_t i = 0; i < ks.size(); ++i) p[i] = a(i) * b(i);
+    // Delay slope: least-squares line through the unwrapped phase across subcarriers (the
+    // product's phase turns by well under π between neighbours at these delays). The
+    // preprocessing's slope from neighbouring subcarriers' rotations
+    // (CsiPreprocessor::estimatePhaseSlope) was tried on these products: on the WSR development
+    // sets it took LOS_Set_A's bearing error from 2.7° to 29° mean (its profiles lose their peak).
+    // (MRPT's unwrap2PiSequence adds at most one turn per value, not the running sum.)
+    std::vector<double> phase(p.size());
+    for (size_t i = 0; i < p.size(); ++i)
+        phase[i] = i == 0 ? std::arg(p[i])
+                          : phase[i - 1] + std::remainder(std::arg(p[i]) - phase[i - 1], 2 * M_PI);
+    double mk = 0, mp = 0;
+    for (size_t i = 0; i < p.size(); ++i) mk += ks[i], mp += phase[i];
+    mk /= double(p.size()), mp /= double(p.size());
+    double skp = 0, skk = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+        skp += (ks[i] - mk) * (phase[i] - mp), skk += (ks[i] - mk) * (ks[i] - mk);
+    const double slope = skk > 0 ? skp / skk : 0.0;
+    std::complex<double> sum = 0;
+    for (size_t i = 0; i < p.size(); ++i) sum += p[i] * std::polar(1.0, -slope * ks[i]);
+    if (std::abs(sum) == 0)
+    {
+        if (why) *why = "zero channel";
+        return std::nullopt;
+    }
+    return sum / double(p.size());
+}
+}  // namespace
+
 std::optional<std::complex<double>> combinedProduct(
     const CObservationWiFiCSI& heardByMover, const CObservationWiFiCSI& heardByPeer,
     unsigned moverRx, unsigned peerRx, std::string* why)
@@ -43,29 +81,33 @@ std::optional<std::complex<double>> combinedProduct(
     if (!chainValues(heardByMover, moverRx, ka, a)) return fail("mover's chain not in the frame");
     if (!chainValues(heardByPeer, peerRx, kb, b)) return fail("peer's chain not in the frame");
     if (ka != kb || ka.size() < 2) return fail("the two frames report different subcarriers");
-    std::vector<std::complex<double>> p(a.size());
-    for (size_t i = 0; i < a.size(); ++i) p[i] = a[i] * b[i];
-    // Delay slope: least-squares line through the unwrapped phase across subcarriers (the
-    // product's phase turns by well under π between neighbours at these delays). The
-    // preprocessing's slope from neighbouring subcarriers' rotations
-    // (CsiPreprocessor::estimatePhaseSlope) was tried on these products: on the WSR development
-    // sets it took LOS_Set_A's bearing error from 2.7° to 29° mean (its profiles lose their peak).
-    // (MRPT's unwrap2PiSequence adds at most one turn per value, not the running sum.)
-    std::vector<double> phase(p.size());
-    for (size_t i = 0; i < p.size(); ++i)
-        phase[i] = i == 0 ? std::arg(p[i])
-                          : phase[i - 1] + std::remainder(std::arg(p[i]) - phase[i - 1], 2 * M_PI);
-    double mk = 0, mp = 0;
-    for (size_t i = 0; i < p.size(); ++i) mk += ka[i], mp += phase[i];
-    mk /= double(p.size()), mp /= double(p.size());
-    double skp = 0, skk = 0;
-    for (size_t i = 0; i < p.size(); ++i)
-        skp += (ka[i] - mk) * (phase[i] - mp), skk += (ka[i] - mk) * (ka[i] - mk);
-    const double slope = skk > 0 ? skp / skk : 0.0;
-    std::complex<double> sum = 0;
-    for (size_t i = 0; i < p.size(); ++i) sum += p[i] * std::polar(1.0, -slope * ka[i]);
-    if (std::abs(sum) == 0) return fail("zero channel");
-    return sum / double(p.size());
+    return productOverSubcarriers(
+        ka, [&](size_t i) { return a[i]; }, [&](size_t i) { return b[i]; }, why);
+}
+
+std::optional<std::complex<double>> combinedProduct(
+    const CleanCsi& heardByMover, const CleanCsi& heardByPeer, unsigned moverRx, unsigned peerRx,
+    std::string* why)
+{
+    const auto fail = [&](const char* text) -> std::optional<std::complex<double>>
+    {
+        if (why) *why = text;
+        return std::nullopt;
+    };
+    if (moverRx >= heardByMover.nRx || heardByMover.nTx < 1)
+        return fail("mover's chain not in the frame");
+    if (peerRx >= heardByPeer.nRx || heardByPeer.nTx < 1)
+        return fail("peer's chain not in the frame");
+    if (!heardByMover.layout || !heardByPeer.layout ||
+        heardByMover.layout->subcarriers != heardByPeer.layout->subcarriers ||
+        heardByMover.layout->size() < 2)
+        return fail("the two frames report different subcarriers");
+    const auto a = heardByMover.H.row(Eigen::Index(moverRx));
+    const auto b = heardByPeer.H.row(Eigen::Index(peerRx));
+    return productOverSubcarriers(
+        heardByMover.layout->subcarriers,
+        [&](size_t i) { return std::complex<double>(a[Eigen::Index(i)]); },
+        [&](size_t i) { return std::complex<double>(b[Eigen::Index(i)]); }, why);
 }
 
 std::vector<uint64_t> unwrapCounter16(const std::vector<uint16_t>& counters)
@@ -275,6 +317,107 @@ std::optional<SarEstimate> estimateBearing(
     const double fromPath = options.positionStdGain * options.positionStd_m / est.apertureLength_m;
     est.azimuthStd_rad = std::hypot(est.azimuthStd_rad, fromPath);
     return est;
+}
+
+std::string SyntheticApertureEstimator::description() const
+{
+    return "one antenna on a moving robot: forward x reverse channel of each exchange with a "
+           "peer over the robot's path (WSR's synthetic aperture; needs the peer's recording "
+           "and odometry)";
+}
+
+std::vector<std::string> SyntheticApertureEstimator::parameterKeys() const
+{
+    return {"aperture_s",  "min_aperture_m", "position_std_m",
+            "mover_chain", "peer_chain",     "keep_profile"};
+}
+
+bool SyntheticApertureEstimator::estimate(
+    const std::vector<const CleanCsi*>& frames, const bearing::EstimatorContext& ctx,
+    bearing::BearingResult& result)
+{
+    result = bearing::BearingResult();
+    last_.reset();
+    hasProfile_ = false;
+    const auto fail = [&](std::string why)
+    {
+        whyNot_ = std::move(why);
+        return false;
+    };
+    if (frames.empty()) return fail("no frames");
+    if (!ctx.peerRecordingOf || !ctx.antennaPoseAt)
+        return fail("needs the peer's recording and the robot's poses");
+    const CleanCsi& newest = *frames.back();
+    const auto reverse = ctx.peerRecordingOf(newest.transmitter);
+    if (reverse.empty())
+        return fail(
+            "no recording by " + newest.transmitter.asString() + " of this robot's packets");
+    const auto newestPose = ctx.antennaPoseAt(newest.timestamp);
+    if (!newestPose) return fail("no pose at the newest frame");
+
+    std::vector<uint16_t> ca, cb;
+    for (const auto* f : frames) ca.push_back(f->frameCounter);
+    for (const auto* f : reverse) cb.push_back(f->frameCounter);
+    exchanges_.clear();
+    for (const auto& [i, j] : pairByCounter(unwrapCounter16(ca), unwrapCounter16(cb)))
+    {
+        const auto product =
+            combinedProduct(*frames[i], *reverse[j], opts_.moverChain, opts_.peerChain);
+        const auto pose = ctx.antennaPoseAt(frames[i]->timestamp);
+        if (product && pose)
+            exchanges_.push_back(
+                {mrpt::Clock::toDouble(frames[i]->timestamp), {pose->x, pose->y}, *product});
+    }
+    SarOptions options;
+    options.carrier_Hz = newest.layout->centerFrequency_Hz;
+    options.minApertureLength_m = opts_.minAperture_m;
+    options.positionStd_m = opts_.positionStd_m;
+    std::string whyNot;
+    last_ = estimateBearing(exchanges_, options, whyNot);
+    if (!last_) return fail(whyNot);
+    const SarEstimate& est = *last_;
+
+    // From the aperture's start to the newest pose: through the fitted peer position when the
+    // near field fitted best (the far-field direction is the same from anywhere).
+    double azimuth = est.azimuth_rad;
+    if (est.range_m > 0)
+    {
+        const mrpt::math::TPoint2D peer(
+            est.start.x + est.range_m * std::cos(est.azimuth_rad),
+            est.start.y + est.range_m * std::sin(est.azimuth_rad));
+        azimuth = std::atan2(peer.y - newestPose->y, peer.x - newestPose->x);
+    }
+    result.valid = true;
+    result.aoa_rad = mrpt::math::wrapToPi(azimuth - newestPose->phi);
+    result.aoaMirror_rad = result.aoa_rad;
+    result.aoaStd_rad = est.azimuthStd_rad;
+    result.quality = est.quality;
+    result.framesUsed = unsigned(est.packetsUsed);
+    result.pathsDetected = 1;
+    if (opts_.keepProfile)
+    {
+        // In the antenna's frame at the newest pose, ascending.
+        const size_t n = est.profile.size();
+        std::vector<std::pair<double, float>> byAngle(n);
+        for (size_t a = 0; a < n; ++a)
+            byAngle[a] = {
+                mrpt::math::wrapToPi(-M_PI + 2 * M_PI * double(a) / double(n) - newestPose->phi),
+                float(est.profile[a])};
+        std::sort(byAngle.begin(), byAngle.end());
+        profile_.angles_rad.resize(n);
+        profile_.delays_s = {0.0};
+        profile_.values.resize(Eigen::Index(n), 1);
+        for (size_t a = 0; a < n; ++a)
+            profile_.angles_rad[a] = byAngle[a].first,
+            profile_.values(Eigen::Index(a), 0) = byAngle[a].second;
+        profile_.label = "synthetic-aperture Bartlett power (far field)";
+        profile_.peakAngle_rad = result.aoa_rad;
+        profile_.peakDelay_s = 0;
+        profile_.hasPeak = true;
+        hasProfile_ = true;
+    }
+    whyNot_.clear();
+    return true;
 }
 
 }  // namespace mrpt_wifi::sar

@@ -68,6 +68,9 @@ struct PreprocessOptions
     bool applyTransmitterCalibration = true;
     /** Use at most this many transmit streams per frame (the first complete ones). */
     unsigned maxStreams = 8;
+    /** Accept frames of one receive antenna (a synthetic aperture needs nothing more); false:
+     *  rejected as RejectReason::SingleAntenna, since they hold no angle of arrival. */
+    bool acceptSingleAntenna = false;
     /** Measure each frame's inter-chain delays and classify the receive chains' jump states
      *  (ChainStates.h); with a calibration, correct each chain for its state before the
      *  calibration, and give no bearing from a frame with a chain in a state the calibration
@@ -104,6 +107,7 @@ struct CleanCsi
     mrpt::poses::CPose3D sensorPose;
     int8_t rssi_dBm = 0;
     uint16_t sequenceNumber = 0;
+    uint16_t frameCounter = 0;  //!< the sender's frame counter (firmwareCounter)
     unsigned nRx = 0;
     unsigned nTx = 0;                  //!< streams used
     std::vector<uint8_t> streamIndex;  //!< original transmit stream of each used one

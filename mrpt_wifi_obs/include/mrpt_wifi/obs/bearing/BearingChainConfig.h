@@ -15,6 +15,7 @@ namespace mrpt_wifi::bearing
  *  preprocess: {min_rssi_dbm: -80, require_calibration: false, max_streams: 4, ...}
  *  window: {capacity: 32, max_age_s: 1.0, stride: 1}
  *  estimators: {music: {...}, aoa_only: {...}}   # per estimator name
+ *  synthetic_aperture: {peers: {PEER_LABEL: "MAC", ...}, interval_s: 1.0}  # estimator sar
  *  \endcode */
 struct BearingChainConfig
 {

@@ -2,12 +2,15 @@
 #pragma once
 
 #include <mrpt/containers/yaml.h>
+#include <mrpt/core/Clock.h>
+#include <mrpt/math/TPose2D.h>
 #include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +85,12 @@ struct EstimatorOptions
     double directPathPowerRatio = 0.3;  //!< `direct_path_power_ratio`: peaks this strong compete
     // AoD
     std::string aodMethod = "bartlett";  //!< `aod_method`: bartlett | music
+    // Synthetic aperture (one antenna on a moving robot)
+    double aperture_s = 15;      //!< `aperture_s`: span of the robot's frames combined
+    double minAperture_m = 0.3;  //!< `min_aperture_m`: shorter paths give no bearing
+    double positionStd_m = 0;    //!< `position_std_m`: RMS error of the poses over the path
+    unsigned moverChain = 0;     //!< `mover_chain`: the moving robot's receive chain
+    unsigned peerChain = 0;      //!< `peer_chain`: the peer's receive chain
 
     /** Reads a YAML map; throws std::invalid_argument naming an unknown key or a bad value.
      *  `allowed`: keys this estimator understands. */
@@ -96,6 +105,13 @@ struct EstimatorContext
     const AntennaArray* rxArray = nullptr;
     /** Array of a transmitter (by MAC); nullptr if unknown (no AoD then). */
     std::function<const AntennaArray*(const MacAddress&)> txArrayOf;
+
+    /** Synthetic aperture only: what the peer (by MAC) recorded of this robot's packets,
+     *  oldest first (empty when nothing), and the receive antenna's pose (position, and the
+     *  robot's heading plus the antenna's yaw) at a time, in any fixed frame; nullopt outside
+     *  the known poses. */
+    std::function<std::vector<const CleanCsi*>(const MacAddress&)> peerRecordingOf;
+    std::function<std::optional<mrpt::math::TPose2D>(mrpt::Clock::time_point)> antennaPoseAt;
 };
 
 /** One bearing estimator ("observation processor"): named, configurable, reusable across frames
@@ -121,6 +137,13 @@ public:
     /** Frames the estimator wants from the transmitter's window. */
     virtual size_t framesWanted() const { return opts_.window; }
 
+    /** Synthetic-aperture estimators combine one antenna's frames over the robot's motion
+     *  with the peer's recording (EstimatorContext::peerRecordingOf, ::antennaPoseAt) and need
+     *  each frame's absolute phase (no sampling-time-offset or power normalisation), over
+     *  windowSpan_s() seconds. The others take frames while the robot hardly moves. */
+    virtual bool syntheticAperture() const { return false; }
+    virtual double windowSpan_s() const { return 0; }
+
     /** Estimates from the given frames of one transmitter (oldest first; all of one shape).
      *  Returns false (and result.valid = false) if it can't, e.g. too few antennas. */
     virtual bool estimate(
@@ -138,6 +161,9 @@ protected:
 
 /** Names of all estimators, in the order of the documentation. */
 std::vector<std::string> estimatorNames();
+/** The estimators that take an antenna array's frames: all but the synthetic aperture ("sar",
+ *  one antenna on a moving robot with a peer's recording). */
+std::vector<std::string> arrayEstimatorNames();
 /** Creates an estimator by name with options; throws std::invalid_argument listing the known
  *  names for an unknown one. */
 std::unique_ptr<BearingEstimator> createEstimator(

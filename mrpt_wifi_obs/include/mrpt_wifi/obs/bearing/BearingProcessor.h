@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 
 namespace mrpt_wifi::bearing
 {
@@ -44,6 +45,12 @@ public:
          *  nullopt: on for the `default` estimator, off for the others. */
         std::optional<bool> tracking;
         BearingTracker::Options tracker;
+        /** Synthetic aperture (estimator `sar`): sensor labels of the peers' recordings of this
+         *  robot's packets, each with the peer's MAC. Such frames are kept for the estimator,
+         *  not estimated on. */
+        std::map<std::string, MacAddress> peerRecordings;
+        /** Synthetic aperture: at most one estimate per transmitter per this many seconds. */
+        double apertureInterval_s = 1.0;
     };
 
     BearingProcessor(
@@ -71,7 +78,8 @@ public:
     /** Odometry interpolated at t; nullopt outside the known span (±0.25 s at the ends). */
     std::optional<mrpt::math::TPose2D> odometryAt(mrpt::Clock::time_point t) const;
 
-    /** Runs the chain on one frame. AoD only for transmitters whose chains are calibrated
+    /** Runs the chain on one frame (a peer's recording of this robot, Options::peerRecordings,
+     *  is only kept). AoD only for transmitters whose chains are calibrated
      *  (Options::uncalibratedAod), its σ widened by the calibration's AoD residual. Returns the
      *  bearing (sensor label: the CSI's + "_AOA"; its
      *  CObservationBearingRange gets "_AOA_BEARING"), or nullptr when the frame was rejected
@@ -103,6 +111,8 @@ private:
     std::map<MacAddress, AntennaArray> txArrays_;
     std::optional<AntennaArray> defaultTxArray_;
     std::map<MacAddress, unsigned> sinceLast_;
+    TransmitterWindows peerWindows_;             //!< peers' recordings of this robot, by peer MAC
+    std::map<MacAddress, double> lastAperture_;  //!< time of each peer's last estimate [s]
     std::vector<const CleanCsi*> frames_;
     std::deque<std::pair<double, mrpt::math::TPose2D>> odometry_;  //!< (time [s], pose)
     const CleanCsi* lastFrame_ = nullptr;

@@ -3,6 +3,8 @@
 
 #include <mrpt/math/TPoint2D.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
+#include <mrpt_wifi/obs/CsiPreprocessing.h>
+#include <mrpt_wifi/obs/bearing/BearingEstimator.h>
 
 #include <complex>
 #include <cstdint>
@@ -35,6 +37,12 @@ struct Exchange
 std::optional<std::complex<double>> combinedProduct(
     const CObservationWiFiCSI& heardByMover, const CObservationWiFiCSI& heardByPeer,
     unsigned moverRx, unsigned peerRx, std::string* why = nullptr);
+
+/** The same for two preprocessed frames (CleanCsi row stream 0 × chain; both must keep each
+ *  frame's absolute phase: no sampling-time-offset removal). */
+std::optional<std::complex<double>> combinedProduct(
+    const CleanCsi& heardByMover, const CleanCsi& heardByPeer, unsigned moverRx, unsigned peerRx,
+    std::string* why = nullptr);
 
 /** Unwraps a 16-bit counter in arrival order (a reset backwards by more than half the range
  *  counts as a wrap). */
@@ -116,5 +124,39 @@ struct SarEstimate
  * robot did not move enough or no exchange has a usable product. */
 std::optional<SarEstimate> estimateBearing(
     const std::vector<Exchange>& exchanges, const SarOptions& options, std::string& whyNot);
+
+/** The synthetic aperture as a registered bearing estimator ("sar", bearing::createEstimator):
+ * given one peer's frames heard by the moving robot over the last `aperture_s`, the peer's
+ * recording of the robot's packets and the antenna's poses (EstimatorContext), the bearing to
+ * the peer from the antenna's newest pose, in the antenna's frame (a near-field fit's peer
+ * position is carried from the aperture's start to the newest pose). BearingProcessor feeds it
+ * from a rawlog holding both recordings and odometry (Options::peerRecordings). */
+class SyntheticApertureEstimator : public bearing::BearingEstimator
+{
+public:
+    std::string name() const override { return "sar"; }
+    std::string description() const override;
+    std::vector<std::string> parameterKeys() const override;
+    /** The frames of `aperture_s` seconds at a few hundred exchanges per second. */
+    size_t framesWanted() const override { return kMaxFrames; }
+    bool syntheticAperture() const override { return true; }
+    double windowSpan_s() const override { return opts_.aperture_s; }
+
+    bool estimate(
+        const std::vector<const CleanCsi*>& frames, const bearing::EstimatorContext& ctx,
+        bearing::BearingResult& result) override;
+
+    /** The last estimate in the trajectory's frame (start, coherence, range, profile), or
+     *  nullopt with lastWhyNot() saying why there was none. */
+    const std::optional<SarEstimate>& lastEstimate() const { return last_; }
+    const std::string& lastWhyNot() const { return whyNot_; }
+
+    static constexpr size_t kMaxFrames = 8192;
+
+private:
+    std::optional<SarEstimate> last_;
+    std::string whyNot_;
+    std::vector<Exchange> exchanges_;
+};
 
 }  // namespace mrpt_wifi::sar
