@@ -62,6 +62,26 @@ std::vector<sar::Exchange> arcExchanges(double azimuth, double range, unsigned s
     }
     return out;
 }
+/** Rooms 1-8 of the simulator, three peers each, true positions: every peer has a bearing, the
+ *  median |error| is below 2° and ≥ 90 % lie within 3σ. */
+void expectDevelopmentRoomsWithinTwoDegrees(bool viaBearingChain)
+{
+    std::vector<double> errors;
+    size_t covered = 0;
+    for (uint32_t seed = 1; seed <= 8; ++seed)
+        for (const auto& p :
+             sartest::runRoom(
+                 seed, std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays", 0, 0, viaBearingChain)
+                 .peers)
+        {
+            ASSERT_TRUE(p.estimated) << "room " << seed;
+            errors.push_back(std::abs(p.error_deg));
+            covered += std::abs(p.error_deg) <= 3 * p.std_deg;
+        }
+    std::sort(errors.begin(), errors.end());
+    EXPECT_LT(errors[errors.size() / 2], 2.0);
+    EXPECT_GE(double(covered), 0.9 * double(errors.size()));
+}
 }  // namespace
 
 TEST(SyntheticAperture, FindsThePeerFromAnArcWithLostPacketsAndAStandstill)
@@ -299,19 +319,7 @@ TEST(SyntheticAperture, SimulatedRoomsDevelopmentSeeds)
 {
     // A slice of `sar-accuracy --rooms 50` (development seeds; README: median 0.85°, 96 %
     // within 3σ with true positions): rooms 1–8, three peers each, true positions.
-    std::vector<double> errors;
-    size_t covered = 0;
-    for (uint32_t seed = 1; seed <= 8; ++seed)
-        for (const auto& p :
-             sartest::runRoom(seed, std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays").peers)
-        {
-            ASSERT_TRUE(p.estimated) << "room " << seed;
-            errors.push_back(std::abs(p.error_deg));
-            covered += std::abs(p.error_deg) <= 3 * p.std_deg;
-        }
-    std::sort(errors.begin(), errors.end());
-    EXPECT_LT(errors[errors.size() / 2], 2.0);
-    EXPECT_GE(double(covered), 0.9 * double(errors.size()));
+    expectDevelopmentRoomsWithinTwoDegrees(false);
 }
 
 TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
@@ -413,20 +421,7 @@ TEST(SyntheticAperture, RegisteredEstimatorInTheBearingChainDevelopmentSeeds)
     // recordings and odometry fed as csi-bearings feeds a rawlog); the last bearing per peer,
     // in the robot's frame, against the truth from the robot's true pose at its frame
     // (`sar-accuracy --bearing-chain`: rooms 1-10 median 0.53 deg, 93 % within 3 sigma).
-    std::vector<double> errors;
-    size_t covered = 0;
-    for (uint32_t seed = 1; seed <= 8; ++seed)
-        for (const auto& p :
-             sartest::runRoom(seed, std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays", 0, 0, true)
-                 .peers)
-        {
-            ASSERT_TRUE(p.estimated) << "room " << seed;
-            errors.push_back(std::abs(p.error_deg));
-            covered += std::abs(p.error_deg) <= 3 * p.std_deg;
-        }
-    std::sort(errors.begin(), errors.end());
-    EXPECT_LT(errors[errors.size() / 2], 2.0);
-    EXPECT_GE(double(covered), 0.9 * double(errors.size()));
+    expectDevelopmentRoomsWithinTwoDegrees(true);
 }
 
 TEST(SyntheticAperture, CsiBearingsRunsItOnARawlogWithBothRecordingsAndOdometry)
