@@ -279,6 +279,7 @@ int main(int argc, char** argv)
             if (argImages.isSet()) fs::create_directories(argImages.getValue());
 
             std::map<MacAddress, TransmitterStats> stats;
+            std::map<std::string, uint64_t> peerRecordingFrames;  //!< by sensor label
             std::array<uint64_t, kRejectReasonCount> rejected{};
             std::vector<std::string> chainStateNotices;
             uint64_t csiSeen = 0, bearingsTotal = 0, imagesTotal = 0;
@@ -305,6 +306,16 @@ int main(int argc, char** argv)
                     processor.addOdometry(
                         mrpt::Clock::fromDouble(tumOdometry[nextTum].first),
                         tumOdometry[nextTum].second);
+                // A peer's recording of this robot (estimator sar) is input, not a transmitter.
+                if (const auto peer = cfg.window.peerRecordings.find(c.sensorLabel);
+                    peer != cfg.window.peerRecordings.end())
+                {
+                    ++peerRecordingFrames[peer->first];
+                    RejectReason why;
+                    processor.process(c, &why);
+                    if (why != RejectReason::Accepted) ++rejected[size_t(why)];
+                    return;
+                }
                 auto& st = stats[c.transmitter];
                 ++st.frames;
                 RejectReason why;
@@ -437,6 +448,10 @@ int main(int argc, char** argv)
                           << std::setw(8) << s.bearings << "  " << std::setw(15) << std::fixed
                           << std::setprecision(1) << median(s.aoa_deg) << "  " << std::setw(14)
                           << std::setprecision(2) << median(s.quality) << "\n";
+            for (const auto& [label, frames] : peerRecordingFrames)
+                std::cout << "  " << label << ": " << frames << " frames of peer "
+                          << cfg.window.peerRecordings.at(label).asString()
+                          << "'s recording of this robot (synthetic aperture input)\n";
             for (const auto& [mac, s] : stats)
                 if (s.aodEstimated > s.aodEmitted)
                     std::cout << "  " << mac.asString() << ": no AoD (" << s.aodEstimated

@@ -63,6 +63,17 @@ std::vector<sar::Exchange> arcExchanges(double azimuth, double range, unsigned s
     }
     return out;
 }
+/** LOS_Set_A location 1 of the WSR subset in ../shared (with a trailing '/'), or "" when
+ *  absent; kWsrDrive is its first drive. */
+std::string wsrLocation()
+{
+    const std::string loc = test::sharedDir() +
+                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
+                            "0627_2D-multi-link_A_L1/";
+    return test::sharedDir().empty() || !std::filesystem::exists(loc) ? std::string() : loc;
+}
+constexpr const char* kWsrDrive = "2021-06-27_202550";
+
 /** Rooms 1-8 of the simulator, three peers each, true positions: every peer has a bearing, the
  *  median |error| is below 2° and ≥ 90 % lie within 3σ. */
 void expectDevelopmentRoomsWithinTwoDegrees(bool viaBearingChain)
@@ -196,11 +207,8 @@ TEST(WifiSar, RealRecordingGivesOneBearingPerPeer)
     // WSR Toolbox Dataset, LOS_Set_A (development set), location 1, first sample: the moving
     // robot's recording, each peer's, and the motion-capture trajectory. Peer positions from
     // the location's groundtruth_positions.json, MACs from config_files/dataset.json.
-    const std::string loc = test::sharedDir() +
-                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
-                            "0627_2D-multi-link_A_L1/";
-    if (test::sharedDir().empty() || !std::filesystem::exists(loc))
-        GTEST_SKIP() << "WSR recordings not found (../shared absent)";
+    const std::string loc = wsrLocation();
+    if (loc.empty()) GTEST_SKIP() << "WSR recordings not found (../shared absent)";
     test::TempDir tmp;
     std::ofstream(tmp.file("peers.yaml"))
         << "transmitters:\n"
@@ -325,12 +333,8 @@ TEST(SyntheticAperture, SimulatedRoomsDevelopmentSeeds)
 
 TEST(WifiSar, ATrajectoryOnAnotherClockIsNamedAndTheExitStatusSaysSo)
 {
-    const std::string loc = test::sharedDir() +
-                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
-                            "0627_2D-multi-link_A_L1/";
-    if (test::sharedDir().empty() || !std::filesystem::exists(loc))
-        GTEST_SKIP() << "WSR recordings not found (../shared absent)";
-    const std::string s = "2021-06-27_202550";
+    const std::string loc = wsrLocation(), s = kWsrDrive;
+    if (loc.empty()) GTEST_SKIP() << "WSR recordings not found (../shared absent)";
     // The right files, the trajectory shifted by an hour: no exchange inside it.
     const std::string cmd = test::binDir() + "/wifi-sar -q --rx " + loc + "csi_rx_" + s +
                             ".dat --tx " + loc + "csi_tx2_" + s + ".dat --trajectory " + loc +
@@ -492,6 +496,11 @@ TEST(SyntheticAperture, CsiBearingsRunsItOnARawlogWithBothRecordingsAndOdometry)
     ASSERT_EQ(status, 0) << out;
     EXPECT_NE(out.find("Algo  : sar"), std::string::npos) << out;
     EXPECT_NE(out.find("Rejected frames: 0"), std::string::npos) << out;
+    // The peers' recordings are named as input, not listed as a transmitter without bearings.
+    EXPECT_NE(
+        out.find("PEER0: " + std::to_string(rec.heardByPeer[0].size()) + " frames of peer"),
+        std::string::npos)
+        << out;
 
     std::ifstream csv(csvPath);
     std::string line;
@@ -527,12 +536,8 @@ TEST(SyntheticAperture, RegisteredEstimatorOnARealRecording)
     // set) through the bearing chain with the registered estimator: the robot's Intel 5300
     // frames, each peer's recording under its own label, OptiTrack positions as odometry (no
     // heading recorded: 0, so the bearing is the azimuth in OptiTrack's frame).
-    const std::string loc = test::sharedDir() +
-                            "/data/wsr/Dataset/2D-Displacement_raw_data/LOS_Set_A/"
-                            "0627_2D-multi-link_A_L1/";
-    if (test::sharedDir().empty() || !std::filesystem::exists(loc))
-        GTEST_SKIP() << "WSR recordings not found (../shared absent)";
-    const std::string s = "2021-06-27_202550";
+    const std::string loc = wsrLocation(), s = kWsrDrive;
+    if (loc.empty()) GTEST_SKIP() << "WSR recordings not found (../shared absent)";
     struct Peer
     {
         const char* label;
