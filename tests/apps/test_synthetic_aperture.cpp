@@ -215,7 +215,7 @@ TEST(WifiSar, RealRecordingGivesOneBearingPerPeer)
            "  - {name: tx2, mac: '00:21:6a:3f:17:5a', position: [-2.42, 2.65]}\n"
            "  - {name: tx3, mac: '00:21:6a:30:d2:3c', position: [2.53, -2.65]}\n"
            "  - {name: tx4, mac: '00:21:6a:b2:6e:fa', position: [-3.73, -1.49]}\n";
-    const std::string s = "2021-06-27_202550";
+    const std::string s = kWsrDrive;
     const std::string cmd = test::binDir() + "/wifi-sar -q --rx " + loc + "csi_rx_" + s +
                             ".dat --tx " + loc + "csi_tx2_" + s + ".dat --tx " + loc + "csi_tx3_" +
                             s + ".dat --tx " + loc + "csi_tx4_" + s + ".dat --trajectory " + loc +
