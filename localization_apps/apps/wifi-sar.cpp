@@ -312,7 +312,7 @@ int main(int argc, char** argv)
                 if (!csv) throw std::runtime_error("cannot write '" + argCsv.getValue() + "'");
                 csv << "mac,file,azimuth_deg,azimuth_std_deg,quality,packets_used,start_x,"
                        "start_y,start_time,aperture_m,range_m,pairs,true_azimuth_deg,error_deg,"
-                       "coherence,time_offset\n";
+                       "coherence,time_offset,mirror_azimuth_deg,mirror_power\n";
             }
             int failed = 0;
             std::vector<BearingToKnown> toKnownPeers;
@@ -350,6 +350,12 @@ int main(int argc, char** argv)
                     r.hasAoa = true;
                     r.aoa = std::remainder(est->azimuth_rad - at.phi, 2 * M_PI);
                     r.aoaStd = est->azimuthStd_rad;
+                    // A path too straight to tell the peer from its mirror image: both.
+                    if (est->mirrorPower >= sar::SyntheticApertureEstimator::kMirrorAmbiguity)
+                    {
+                        r.aoaAmbiguous = true;
+                        r.aoaMirror = std::remainder(est->mirror_rad - at.phi, 2 * M_PI);
+                    }
                     records.push_back(r);
                 }
                 if (!start) start = est->start;
@@ -384,12 +390,13 @@ int main(int argc, char** argv)
                     std::snprintf(
                         line, sizeof(line),
                         "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%."
-                        "3f\n",
+                        "3f,%.3f,%.4f\n",
                         peer.mac.asString().c_str(), peer.file.c_str(),
                         mrpt::RAD2DEG(est->azimuth_rad), mrpt::RAD2DEG(est->azimuthStd_rad),
                         est->quality, est->packetsUsed, est->start.x, est->start.y,
                         est->startTime_s, est->apertureLength_m, est->range_m, peer.pairs,
-                        mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err), est->coherence, offset);
+                        mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err), est->coherence, offset,
+                        mrpt::RAD2DEG(est->mirror_rad), est->mirrorPower);
                     csv << line;
                 }
             }

@@ -16,6 +16,7 @@
 #include <mrpt_wifi/sim/RandomRoom.h>
 
 #include <cmath>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,6 +35,38 @@ struct RoomResult
     double width = 0, height = 0;
     std::vector<PeerResult> peers;
 };
+
+/** The registered estimator `sar` in a BearingProcessor fed as csi-bearings feeds a rawlog
+ *  with both recordings (each peer's under its own label) and odometry every 20 ms from t0
+ *  (`odometryAt`: the robot's pose); the last bearing per peer. */
+inline std::map<MacAddress, CObservationWiFiBearing::Ptr> lastChainBearings(
+    const sim::ExchangeRecording& rec, const std::vector<sim::ExchangePeer>& peers,
+    const std::function<mrpt::math::TPose2D(double)>& odometryAt, double t0,
+    double positionStd_m = 0)
+{
+    bearing::BearingProcessor::Options po;
+    for (size_t m = 0; m < peers.size(); ++m)
+    {
+        po.peerRecordings["PEER" + std::to_string(m)] = peers[m].mac;
+        for (const auto& f : rec.heardByPeer[m]) f->sensorLabel = "PEER" + std::to_string(m);
+    }
+    mrpt::containers::yaml params = mrpt::containers::yaml::Map();
+    params["position_std_m"] = positionStd_m;
+    bearing::BearingProcessor proc(
+        CsiPreprocessor(PreprocessOptions(), AntennaArray::singleElement()),
+        bearing::createEstimator("sar", params), po);
+    for (const auto& peer : rec.heardByPeer)
+        for (const auto& f : peer) proc.process(*f);
+    std::map<MacAddress, CObservationWiFiBearing::Ptr> last;
+    double nextOdometry = t0;
+    for (const auto& f : rec.heardByMover)
+    {
+        for (; nextOdometry <= mrpt::Clock::toDouble(f->timestamp) + 0.1; nextOdometry += 0.02)
+            proc.addOdometry(mrpt::Clock::fromDouble(nextOdometry), odometryAt(nextOdometry));
+        if (auto b = proc.process(*f)) last[f->transmitter] = b;
+    }
+    return last;
+}
 
 /** One room: `positionErrorRms_m` > 0 adds a smooth error to the positions the estimator sees.
  *  `viaBearingChain`: through the registered estimator `sar` in a BearingProcessor (both
@@ -89,35 +122,15 @@ inline RoomResult runRoom(
         channel, moverAt, t0, t0 + still + arcTime, moverMac, peers, eo, seed);
     if (viaBearingChain)
     {
-        // Odometry: the positions the estimator sees, with a constant heading (the bearing
-        // comes out in the robot's frame, so the heading must be undone below).
         constexpr double kHeading = 0.3;
-        bearing::BearingProcessor::Options po;
-        for (size_t m = 0; m < peers.size(); ++m)
-        {
-            po.peerRecordings["PEER" + std::to_string(m)] = peers[m].mac;
-            for (const auto& f : rec.heardByPeer[m]) f->sensorLabel = "PEER" + std::to_string(m);
-        }
-        mrpt::containers::yaml params = mrpt::containers::yaml::Map();
-        params["position_std_m"] = positionStd_m;
-        bearing::BearingProcessor proc(
-            CsiPreprocessor(PreprocessOptions(), AntennaArray::singleElement()),
-            bearing::createEstimator("sar", params), po);
-        for (const auto& peer : rec.heardByPeer)
-            for (const auto& f : peer) proc.process(*f);
-        std::map<MacAddress, CObservationWiFiBearing::Ptr> last;
-        double nextOdometry = t0;
-        for (const auto& f : rec.heardByMover)
-        {
-            const double t = mrpt::Clock::toDouble(f->timestamp);
-            for (; nextOdometry <= t + 0.1; nextOdometry += 0.02)
+        const auto last = lastChainBearings(
+            rec, peers,
+            [&](double t)
             {
-                const auto p = seenAt(nextOdometry);
-                proc.addOdometry(
-                    mrpt::Clock::fromDouble(nextOdometry), mrpt::math::TPose2D(p.x, p.y, kHeading));
-            }
-            if (auto b = proc.process(*f)) last[f->transmitter] = b;
-        }
+                const auto p = seenAt(t);
+                return mrpt::math::TPose2D(p.x, p.y, kHeading);
+            },
+            t0, positionStd_m);
         for (const auto& peer : peers)
         {
             PeerResult r;

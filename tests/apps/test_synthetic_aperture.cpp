@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -74,6 +75,36 @@ std::string wsrLocation()
 }
 constexpr const char* kWsrDrive = "2021-06-27_202550";
 
+/** Simulated room 3: the robot stands 2 s, then drives for 7 s along `path` (s from 0 to 1;
+ *  relative to a point 2.5 m and 2 m inside the room's lower-left corner), exchanging packets
+ *  with the room's three access points. */
+struct Room3Drive
+{
+    std::vector<sim::ExchangePeer> peers;
+    double t0 = 0;
+    std::function<mrpt::math::TPoint2D(double)> moverAt;
+    sim::ExchangeRecording rec;
+};
+Room3Drive room3Drive(const std::function<mrpt::math::TPoint2D(double)>& path)
+{
+    sim::RandomRoomOptions ro;
+    ro.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
+    const auto sc = sim::randomRoomScenario(3, ro);
+    const sim::ChannelModel channel(sc);
+    double x0 = 1e9, y0 = 1e9;
+    for (const auto& c : sc.roomCorners) x0 = std::min(x0, c.x), y0 = std::min(y0, c.y);
+    const mrpt::math::TPoint2D origin(x0 + 2.5, y0 + 2.0);
+    Room3Drive d;
+    d.t0 = sc.startTime_unix;
+    d.moverAt = [origin, path, t0 = d.t0](double t)
+    { return origin + path(std::clamp((t - t0 - 2.0) / 7.0, 0.0, 1.0)); };
+    for (const auto& tx : sc.transmitters) d.peers.push_back({tx.mac, {tx.pose.x, tx.pose.y}});
+    d.rec = sim::simulateExchanges(
+        channel, d.moverAt, d.t0, d.t0 + 9.0, MacAddress::fromString("02:00:00:00:aa:01"), d.peers,
+        sim::ExchangeOptions(), 3);
+    return d;
+}
+
 /** Rooms 1-8 of the simulator, three peers each, true positions: every peer has a bearing, the
  *  median |error| is below 2° and ≥ 90 % lie within 3σ. */
 void expectDevelopmentRoomsWithinTwoDegrees(bool viaBearingChain)
@@ -118,6 +149,8 @@ TEST(SyntheticAperture, FindsThePeerFromAnArcWithLostPacketsAndAStandstill)
             EXPECT_NEAR(est->apertureLength_m, 1.0, 0.05);
             EXPECT_GE(est->quality, 0.0);
             EXPECT_LE(est->quality, 1.0);
+            // A quarter circle tells the peer from its mirror image.
+            EXPECT_LT(est->mirrorPower, sar::SyntheticApertureEstimator::kMirrorAmbiguity);
         }
 }
 
@@ -168,6 +201,9 @@ TEST(SyntheticAperture, StraightPathIsFlaggedAsMirrorAmbiguous)
     ASSERT_TRUE(est) << why;
     EXPECT_LT(est->quality, 0.1);
     EXPECT_NEAR(std::abs(mrpt::RAD2DEG(est->azimuth_rad)), 60.0, 1.5);  // 60° or its mirror
+    // The other candidate is the mirror image across the path (the x axis), and is as strong.
+    EXPECT_GT(est->mirrorPower, 0.95);
+    EXPECT_NEAR(mrpt::RAD2DEG(est->mirror_rad), -mrpt::RAD2DEG(est->azimuth_rad), 1.5);
 }
 
 TEST(SyntheticAperture, LocatesTheStartFromBearingsToKnownPeers)
@@ -247,8 +283,10 @@ TEST(WifiSar, RealRecordingGivesOneBearingPerPeer)
         std::vector<std::string> f;
         std::stringstream ss(line);
         for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-        ASSERT_EQ(f.size(), 16u) << line;
+        ASSERT_EQ(f.size(), 18u) << line;
         const double err = std::stod(f[13]), sigma = std::stod(f[3]);
+        // The drive's half circle tells each peer from its mirror image across the path.
+        EXPECT_LT(std::stod(f[17]), sar::SyntheticApertureEstimator::kMirrorAmbiguity) << line;
         // Development figures: 4.8°, 2.1°, 0.5° (WSR's own on this location: 3.5–7.7°).
         EXPECT_LT(std::abs(err), 6.0) << line;
         EXPECT_LE(std::abs(err), 3 * sigma) << line;
@@ -434,26 +472,14 @@ TEST(SyntheticAperture, CsiBearingsRunsItOnARawlogWithBothRecordingsAndOdometry)
     // A robot drives a 1 m quarter circle after standing 2 s, exchanging packets with the three
     // access points of simulated room 3; one rawlog holds what it heard (label MOVER), what each
     // peer heard of it (PEER0..2) and its odometry (heading 0.3 rad), as a user would merge them.
-    sim::RandomRoomOptions ro;
-    ro.arraysDir = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays";
-    const auto sc = sim::randomRoomScenario(3, ro);
-    const sim::ChannelModel channel(sc);
-    double x0 = 1e9, y0 = 1e9;
-    for (const auto& c : sc.roomCorners) x0 = std::min(x0, c.x), y0 = std::min(y0, c.y);
-    const mrpt::math::TPoint2D centre(x0 + 2.5, y0 + 2.0);
-    const double t0 = sc.startTime_unix, still = 2.0, arcTime = 7.0, radius = 0.64;
     constexpr double kHeading = 0.3;
-    const auto moverAt = [&](double t)
-    {
-        const double a = std::clamp((t - t0 - still) / arcTime, 0.0, 1.0) * M_PI / 2;
-        return mrpt::math::TPoint2D(
-            centre.x + radius * std::cos(a), centre.y + radius * std::sin(a));
-    };
-    std::vector<sim::ExchangePeer> peers;
-    for (const auto& tx : sc.transmitters) peers.push_back({tx.mac, {tx.pose.x, tx.pose.y}});
-    const auto rec = sim::simulateExchanges(
-        channel, moverAt, t0, t0 + still + arcTime, MacAddress::fromString("02:00:00:00:aa:01"),
-        peers, sim::ExchangeOptions(), 3);
+    const auto drive = room3Drive(
+        [](double s)
+        {
+            const double a = s * M_PI / 2;
+            return mrpt::math::TPoint2D(0.64 * std::cos(a), 0.64 * std::sin(a));
+        });
+    const auto& [peers, t0, moverAt, rec] = drive;
 
     const std::string rawlog = test::tempPath(".rawlog"), config = test::tempPath(".yaml"),
                       csvPath = test::tempPath(".csv"), outRawlog = test::tempPath(".rawlog");
@@ -603,4 +629,33 @@ TEST(SyntheticAperture, RegisteredEstimatorOnARealRecording)
     }
     std::sort(errors_deg.begin(), errors_deg.end());
     EXPECT_LT(errors_deg[1], 4.0);  // the median of the three
+}
+
+TEST(SyntheticAperture, AStraightDriveGivesBothMirrorCandidatesThroughTheChain)
+{
+    // A straight 1 m drive cannot tell a peer from its mirror image across the path: the
+    // bearing says so (aoaAmbiguous, aoaMirror_rad), and one of the two is the truth.
+    constexpr double kHeading = 0.3;
+    const auto drive = room3Drive([](double s) { return mrpt::math::TPoint2D(s, 0); });
+    const auto last = sartest::lastChainBearings(
+        drive.rec, drive.peers,
+        [&](double t)
+        {
+            const auto p = drive.moverAt(t);
+            return mrpt::math::TPose2D(p.x, p.y, kHeading);
+        },
+        drive.t0);
+    ASSERT_EQ(last.size(), drive.peers.size());
+    for (const auto& peer : drive.peers)
+    {
+        const auto& b = last.at(peer.mac);
+        EXPECT_TRUE(b->aoaAmbiguous) << peer.mac.asString();
+        const auto at = drive.moverAt(mrpt::Clock::toDouble(b->timestamp));
+        const double truth = std::atan2(peer.position.y - at.y, peer.position.x - at.x) - kHeading;
+        const double error = std::min(
+            std::abs(std::remainder(b->aoa_rad - truth, 2 * M_PI)),
+            std::abs(std::remainder(b->aoaMirror_rad - truth, 2 * M_PI)));
+        EXPECT_LT(error, 3 * b->aoaStd_rad) << peer.mac.asString();
+        EXPECT_LT(mrpt::RAD2DEG(error), 6.0) << peer.mac.asString();
+    }
 }

@@ -301,6 +301,31 @@ std::optional<SarEstimate> estimateBearing(
         }
     est.azimuth_rad = mrpt::math::wrapToPi(bestPhi);
     est.range_m = bestRange;
+
+    // The path's main direction (principal axis of the weighted positions) and the estimate
+    // mirrored across it: a straight path supports both equally.
+    {
+        double sw = 0, mx = 0, my = 0;
+        for (const auto& u : used) sw += u.w, mx += u.w * u.dx, my += u.w * u.dy;
+        mx /= sw, my /= sw;
+        double cxx = 0, cyy = 0, cxy = 0;
+        for (const auto& u : used)
+            cxx += u.w * (u.dx - mx) * (u.dx - mx), cyy += u.w * (u.dy - my) * (u.dy - my),
+                cxy += u.w * (u.dx - mx) * (u.dy - my);
+        const double axis = 0.5 * std::atan2(2 * cxy, cxx - cyy);
+        const mrpt::math::TPoint2D dir(std::cos(axis), std::sin(axis));
+        // The peer (far field: a point along the azimuth) reflected across the axis line
+        // through the path's mean position.
+        const double r = bestRange > 0 ? bestRange : 1e3;
+        const mrpt::math::TPoint2D v(r * std::cos(bestPhi) - mx, r * std::sin(bestPhi) - my);
+        const double along = v.x * dir.x + v.y * dir.y;
+        const mrpt::math::TPoint2D mirrored(
+            mx + 2 * along * dir.x - v.x, my + 2 * along * dir.y - v.y);
+        est.mirror_rad = std::atan2(mirrored.y, mirrored.x);
+        est.mirrorRange_m = bestRange > 0 ? mirrored.norm() : 0.0;
+        const double farMirror = mrpt::math::wrapToPi(2 * axis - farPhi);
+        est.mirrorPower = est.profile[size_t(std::lround((farMirror + M_PI) / step) % long(nAz))];
+    }
     double sumAbs = 0;
     for (const auto& u : used) sumAbs += u.w * std::abs(u.h);
     est.coherence = sumAbs > 0 ? std::sqrt(best) / sumAbs : 0.0;
@@ -390,6 +415,18 @@ bool SyntheticApertureEstimator::estimate(
     result.valid = true;
     result.aoa_rad = mrpt::math::wrapToPi(azimuth - newestPose->phi);
     result.aoaMirror_rad = result.aoa_rad;
+    // A path too straight to tell the peer from its mirror image: both, as the linear arrays'
+    // bearings carry them (the localization's likelihood takes the better of the two).
+    if (est.mirrorPower >= kMirrorAmbiguity)
+    {
+        const double r = est.mirrorRange_m > 0 ? est.mirrorRange_m : 1e3;
+        const mrpt::math::TPoint2D mirrorPeer(
+            est.start.x + r * std::cos(est.mirror_rad), est.start.y + r * std::sin(est.mirror_rad));
+        result.aoaAmbiguous = true;
+        result.aoaMirror_rad = mrpt::math::wrapToPi(
+            std::atan2(mirrorPeer.y - newestPose->y, mirrorPeer.x - newestPose->x) -
+            newestPose->phi);
+    }
     result.aoaStd_rad = est.azimuthStd_rad;
     result.quality = est.quality;
     result.framesUsed = unsigned(est.packetsUsed);

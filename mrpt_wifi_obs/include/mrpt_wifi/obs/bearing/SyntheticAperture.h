@@ -108,6 +108,12 @@ struct SarEstimate
     double azimuth_rad = 0;     //!< direction to the peer from `start`, trajectory frame
     double azimuthStd_rad = 0;  //!< 1σ
     double quality = 0;         //!< 0..1: 1 − (highest side peak / main peak) of the profile
+    /** The azimuth mirrored across the path's main direction (from `start`; a near-field
+     *  fit's peer reflected across that line) and the far-field profile's value there (0..1):
+     *  near 1, the path was too straight to tell the peer from its mirror image. */
+    double mirror_rad = 0;
+    double mirrorRange_m = 0;  //!< from `start` (0: far field)
+    double mirrorPower = 0;
     /** |Σ w·h·conj(model)| / Σ w·|h| at the best fit, 0..1: how much of the products' energy
      *  the fitted peer explains (position errors along the path lower it). */
     double coherence = 0;
@@ -152,6 +158,8 @@ public:
     const std::string& lastWhyNot() const { return whyNot_; }
 
     static constexpr size_t kMaxFrames = 8192;
+    /** SarEstimate::mirrorPower from which a bearing is reported as mirror-ambiguous. */
+    static constexpr double kMirrorAmbiguity = 0.8;
 
 private:
     std::optional<SarEstimate> last_;
