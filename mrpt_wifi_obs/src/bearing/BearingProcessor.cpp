@@ -202,21 +202,16 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
 {
     lastFrame_ = nullptr;
     lastResult_ = BearingResult();
-    if (const auto peer = opts_.peerRecordings.find(csi.sensorLabel);
-        peer != opts_.peerRecordings.end())
-    {
-        CsiWindow& window = peerWindows_.of(peer->second);
-        const RejectReason r = pre_.process(csi, window.slot());
-        if (reason) *reason = r;
-        if (r == RejectReason::Accepted) window.commit();
-        return nullptr;
-    }
-    CsiWindow& window = windows_.of(csi.transmitter);
-    CleanCsi& slot = window.slot();
-    const RejectReason r = pre_.process(csi, slot);
+    // A peer's recording of this robot is only kept, by the peer's MAC.
+    const auto peer = opts_.peerRecordings.find(csi.sensorLabel);
+    const bool peerRecording = peer != opts_.peerRecordings.end();
+    CsiWindow& window =
+        peerRecording ? peerWindows_.of(peer->second) : windows_.of(csi.transmitter);
+    const RejectReason r = pre_.process(csi, window.slot());
     if (reason) *reason = r;
     if (r != RejectReason::Accepted) return nullptr;
     window.commit();
+    if (peerRecording) return nullptr;
     lastFrame_ = &window.newest();
 
     EstimatorContext ctx;

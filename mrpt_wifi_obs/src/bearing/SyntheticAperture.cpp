@@ -313,16 +313,19 @@ std::optional<SarEstimate> estimateBearing(
             cxx += u.w * (u.dx - mx) * (u.dx - mx), cyy += u.w * (u.dy - my) * (u.dy - my),
                 cxy += u.w * (u.dx - mx) * (u.dy - my);
         const double axis = 0.5 * std::atan2(2 * cxy, cxx - cyy);
-        const mrpt::math::TPoint2D dir(std::cos(axis), std::sin(axis));
-        // The peer (far field: a point along the azimuth) reflected across the axis line
-        // through the path's mean position.
-        const double r = bestRange > 0 ? bestRange : 1e3;
-        const mrpt::math::TPoint2D v(r * std::cos(bestPhi) - mx, r * std::sin(bestPhi) - my);
-        const double along = v.x * dir.x + v.y * dir.y;
-        const mrpt::math::TPoint2D mirrored(
-            mx + 2 * along * dir.x - v.x, my + 2 * along * dir.y - v.y);
-        est.mirror_rad = std::atan2(mirrored.y, mirrored.x);
-        est.mirrorRange_m = bestRange > 0 ? mirrored.norm() : 0.0;
+        // Far field: the direction reflected across the axis. Near field: the fitted peer
+        // reflected across the axis line through the path's mean position.
+        est.mirror_rad = mrpt::math::wrapToPi(2 * axis - bestPhi);
+        if (bestRange > 0)
+        {
+            const mrpt::math::TPoint2D v(
+                bestRange * std::cos(bestPhi) - mx, bestRange * std::sin(bestPhi) - my);
+            const double along = v.x * std::cos(axis) + v.y * std::sin(axis);
+            const mrpt::math::TPoint2D mirrored(
+                mx + 2 * along * std::cos(axis) - v.x, my + 2 * along * std::sin(axis) - v.y);
+            est.mirror_rad = std::atan2(mirrored.y, mirrored.x);
+            est.mirrorRange_m = mirrored.norm();
+        }
         const double farMirror = mrpt::math::wrapToPi(2 * axis - farPhi);
         est.mirrorPower = est.profile[size_t(std::lround((farMirror + M_PI) / step) % long(nAz))];
     }
@@ -402,30 +405,27 @@ bool SyntheticApertureEstimator::estimate(
     if (!last_) return fail(whyNot);
     const SarEstimate& est = *last_;
 
-    // From the aperture's start to the newest pose: through the fitted peer position when the
-    // near field fitted best (the far-field direction is the same from anywhere).
-    double azimuth = est.azimuth_rad;
-    if (est.range_m > 0)
+    // From the aperture's start to the newest pose, in the antenna's frame: through the fitted
+    // peer position when the near field fitted best (a far-field direction is the same from
+    // anywhere).
+    const auto fromNewestPose = [&](double azimuthFromStart, double range)
     {
-        const mrpt::math::TPoint2D peer(
-            est.start.x + est.range_m * std::cos(est.azimuth_rad),
-            est.start.y + est.range_m * std::sin(est.azimuth_rad));
-        azimuth = std::atan2(peer.y - newestPose->y, peer.x - newestPose->x);
-    }
+        double azimuth = azimuthFromStart;
+        if (range > 0)
+            azimuth = std::atan2(
+                est.start.y + range * std::sin(azimuthFromStart) - newestPose->y,
+                est.start.x + range * std::cos(azimuthFromStart) - newestPose->x);
+        return mrpt::math::wrapToPi(azimuth - newestPose->phi);
+    };
     result.valid = true;
-    result.aoa_rad = mrpt::math::wrapToPi(azimuth - newestPose->phi);
+    result.aoa_rad = fromNewestPose(est.azimuth_rad, est.range_m);
     result.aoaMirror_rad = result.aoa_rad;
     // A path too straight to tell the peer from its mirror image: both, as the linear arrays'
     // bearings carry them (the localization's likelihood takes the better of the two).
     if (est.mirrorPower >= kMirrorAmbiguity)
     {
-        const double r = est.mirrorRange_m > 0 ? est.mirrorRange_m : 1e3;
-        const mrpt::math::TPoint2D mirrorPeer(
-            est.start.x + r * std::cos(est.mirror_rad), est.start.y + r * std::sin(est.mirror_rad));
         result.aoaAmbiguous = true;
-        result.aoaMirror_rad = mrpt::math::wrapToPi(
-            std::atan2(mirrorPeer.y - newestPose->y, mirrorPeer.x - newestPose->x) -
-            newestPose->phi);
+        result.aoaMirror_rad = fromNewestPose(est.mirror_rad, est.mirrorRange_m);
     }
     result.aoaStd_rad = est.azimuthStd_rad;
     result.quality = est.quality;
