@@ -2,7 +2,7 @@
 """Re-runs the kidnapped-robot filter of localization-accuracy's rooms with .ini changes.
 
   python3 scripts/pf_rooms.py BUILD_DIR SWEEP_WORK OUT_DIR odometry|none [--seeds 1,2,3]
-                              [--rooms 1,2] [--jobs 2] [Section/key=value ...]
+                              [--rooms 1,2] [--jobs 2] [--aps N] [Section/key=value ...]
 
 SWEEP_WORK is a `localization-accuracy -w DIR` folder (its room-N/pf.ini and the recorded
 kidnapped/ bearings, odometry and true poses). Each room and filter seed runs
@@ -10,6 +10,10 @@ wifi-pf-localization offline, 3000 particles, with the room's pf.ini changed as 
 figure is the sweep's: median error of the PF mean against the true poses after convergence
 (error < 1 m for 5 s; never: infinite). Prints each room's runs and median, then the runs within
 0.3 m, the runs that never converged and the rooms whose median is within 0.3 m.
+
+--aps N keeps only the room's first N access points (their bearings and map entries): on a sweep
+run with `localization-accuracy --aps 4` it gives the same rooms and drives with the seed's three
+APs, since the APs beyond the third come from a stream of their own.
 """
 import argparse
 import bisect
@@ -56,6 +60,26 @@ def derive_ini(src, dst, overrides):
     open(dst, "w").write("\n".join(out) + "\n")
 
 
+def keep_first_aps(truth_dir, bearings_csv, count, out):
+    """The room's transmitters.yaml and bearings.csv with only its first `count` APs, in out."""
+    text = open(os.path.join(truth_dir, "transmitters.yaml")).read()
+    head, *blocks = re.split(r"(?m)^(?=  - name:)", text)
+    if len(blocks) < count:
+        raise ValueError(f"{truth_dir}: {len(blocks)} APs, fewer than --aps {count}")
+    kept = blocks[:count]
+    macs = {re.search(r"mac: '([^']+)'", b).group(1).lower() for b in kept}
+    aps = os.path.join(out, "transmitters.yaml")
+    open(aps, "w").write(head + "".join(kept))
+    csv = os.path.join(out, "bearings.csv")
+    with open(bearings_csv) as src, open(csv, "w") as f:
+        for line in src:
+            fields = line.split(",")
+            if line.startswith(("#", "timestamp")) or (
+                    len(fields) > 1 and fields[1].lower() in macs):
+                f.write(line)
+    return aps, csv
+
+
 def read_tum(path):
     times, xy = [], []
     for line in open(path):
@@ -97,6 +121,7 @@ def main():
     p.add_argument("--seeds", default="1,2,3")
     p.add_argument("--rooms", default="")
     p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--aps", type=int, default=0, help="keep the first N access points only")
     p.add_argument("overrides", nargs="*", help="Section/key=value")
     a = p.parse_intermixed_args()
     program = os.path.join(a.build, "bin", "wifi-pf-localization")
@@ -124,9 +149,12 @@ def main():
         ini = os.path.join(out, "pf.ini")
         derive_ini(os.path.join(src, "pf.ini"), ini, a.overrides)
         truth = os.path.join(src, "kidnapped", "truth")
+        aps = os.path.join(truth, "transmitters.yaml")
+        bearings = os.path.join(src, "kidnapped", "bearings.csv")
+        if a.aps:
+            aps, bearings = keep_first_aps(truth, bearings, a.aps, out)
         cmd = [program, ini, "-q", "--no-plots",
-               "--seed", str(seed), "-n", "3000", "-m", os.path.join(truth, "transmitters.yaml"),
-               "-b", os.path.join(src, "kidnapped", "bearings.csv"),
+               "--seed", str(seed), "-n", "3000", "-m", aps, "-b", bearings,
                "--sensor-pose", "0.1", "0", "0.4", "0", "0", "0", "-o", out]
         if a.motion == "odometry":
             cmd += ["--odometry-tum", os.path.join(truth, "odometry_tum.txt")]

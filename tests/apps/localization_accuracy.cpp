@@ -1,7 +1,8 @@
 /* localization-accuracy: the three localization case studies over many random rooms, each room
  * judged on its own (issue 19.3), as bearing-accuracy --rooms does for the bearings.
  *
- *   localization-accuracy --rooms N [--eval] [--first-seed S] [--work DIR] [--no-live] ...
+ *   localization-accuracy --rooms N [--eval] [--first-seed S] [--work DIR] [--no-live]
+ *                         [--aps N] ...
  *
  * Per room (sim::randomRoomYaml, with odometry errors drawn from a realistic range):
  *  - bearings through the real chain: wifi-sim → csi-bearings (`default`, the receiver
@@ -54,6 +55,7 @@ const std::string kSensorPose = "--sensor-pose 0.1 0 0.4 0 0 0";  // the random 
 struct Options
 {
     fs::path work;
+    int accessPoints = 3;  //!< sim::RandomRoomOptions::accessPoints
     double kidnappedDuration_s = 40;
     unsigned laps = 3;
     int particles = 3000;
@@ -309,26 +311,30 @@ void addBearingErrors(
     }
 }
 
-/** The AP layout's geometry: the smallest distance between two APs and the area of their
- *  triangle over that of an equilateral one on the longest side (0 = collinear). */
+/** The AP layout's geometry: the smallest distance between two APs and, of the triangles of
+ *  three APs, the largest area over that of an equilateral one on the triangle's longest side
+ *  (0 = all collinear). */
 void apGeometry(Room& room)
 {
-    double minSep = 1e9, maxSide = 0;
+    double minSep = 1e9;
     const auto& a = room.aps;
     for (size_t i = 0; i < a.size(); ++i)
-        for (size_t j = i + 1; j < a.size(); ++j)
-        {
-            const double d = (a[i] - a[j]).norm();
-            minSep = std::min(minSep, d), maxSide = std::max(maxSide, d);
-        }
+        for (size_t j = i + 1; j < a.size(); ++j) minSep = std::min(minSep, (a[i] - a[j]).norm());
     room.apMinSeparation_m = minSep;
-    if (a.size() >= 3 && maxSide > 0)
-    {
-        const double area =
-            0.5 *
-            std::abs((a[1].x - a[0].x) * (a[2].y - a[0].y) - (a[2].x - a[0].x) * (a[1].y - a[0].y));
-        room.apTriangle = area / (std::sqrt(3.0) / 4 * maxSide * maxSide);
-    }
+    room.apTriangle = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        for (size_t j = i + 1; j < a.size(); ++j)
+            for (size_t k = j + 1; k < a.size(); ++k)
+            {
+                const double longest =
+                    std::max({(a[i] - a[j]).norm(), (a[j] - a[k]).norm(), (a[k] - a[i]).norm()});
+                if (longest <= 0) continue;
+                const double area = 0.5 * std::abs(
+                                              (a[j].x - a[i].x) * (a[k].y - a[i].y) -
+                                              (a[k].x - a[i].x) * (a[j].y - a[i].y));
+                room.apTriangle =
+                    std::max(room.apTriangle, area / (std::sqrt(3.0) / 4 * longest * longest));
+            }
 }
 
 /** Simulates a drive of the room and runs csi-bearings on it: truth in DIR/truth, bearings in
@@ -572,6 +578,7 @@ Room evaluateRoom(uint32_t seed, const Options& o)
 
     sim::RandomRoomOptions ro;
     ro.arraysDir = kShare + "/arrays";
+    ro.accessPoints = o.accessPoints;
     ro.duration_s = o.kidnappedDuration_s;
     ro.odometryScaleError = room.scaleError;
     ro.odometryYawScaleError = room.yawScaleError;
@@ -912,7 +919,9 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
               << " s; worst = maximum after convergence). Drift and devices: " << o.laps
               << " laps of a loop; ATE of the solution and of the odometry against the true poses "
                  "(rigid alignment); devices mapped on the odometry (start at the true pose). "
-                 "Bearings: csi-bearings `default` with the true receiver offsets, both drives "
+                 "Access points per room: "
+              << o.accessPoints
+              << ". Bearings: csi-bearings `default` with the true receiver offsets, both drives "
                  "pooled (the random drive and the loop apart in parentheses).\n\n";
     std::cout << "| room | size [m] | odo scale / yaw drift | kidnapped offline odo / none [m] "
                  "| converge [s] | live odo / none [m] | worst after conv. [m] (off odo / none) "
@@ -1026,6 +1035,10 @@ int main(int argc, char** argv)
                 cmd);
             TCLAP::SwitchArg argNoLive(
                 "", "no-live", "Skip the live runs (they take the drive's duration twice)", cmd);
+            TCLAP::ValueArg<int> argAps(
+                "", "aps",
+                "Access points per room (the first three are the seed's whatever the count)", false,
+                3, "N", cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
                 return rc;
@@ -1047,6 +1060,8 @@ int main(int argc, char** argv)
             o.laps = argLaps.getValue();
             o.particles = argParticles.getValue();
             o.live = !argNoLive.getValue();
+            o.accessPoints = argAps.getValue();
+            if (o.accessPoints < 3) throw std::invalid_argument("--aps >= 3");
             if (!(o.kidnappedDuration_s >= 10)) throw std::invalid_argument("--duration >= 10 s");
             if (o.laps < 2) throw std::invalid_argument("--laps >= 2 (revisits)");
             fs::create_directories(o.work);

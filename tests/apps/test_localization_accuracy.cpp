@@ -91,3 +91,18 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     EXPECT_LE(number(room, "central_beyond30"), 0.15) << r.output;
     EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
 }
+
+TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
+{
+    test::TempDir tmp;
+    const auto fewAps = test::run(
+        test::binDir() + "/localization-accuracy --rooms 1 --aps 2 -w " + tmp.file("work"));
+    EXPECT_NE(fewAps.exitCode, 0);
+    EXPECT_NE(fewAps.output.find("--aps"), std::string::npos) << fewAps.output;
+    const auto evalSeed = test::run(
+        test::binDir() + "/localization-accuracy --rooms 1 --first-seed 1000 -w " +
+        tmp.file("work"));
+    EXPECT_NE(evalSeed.exitCode, 0);
+    EXPECT_NE(evalSeed.output.find("--first-seed"), std::string::npos) << evalSeed.output;
+    EXPECT_FALSE(std::filesystem::exists(tmp.file("work/room-1"))) << fewAps.output;
+}

@@ -113,3 +113,32 @@ TEST(RandomRoom, ScenarioKeysAreReadAndChecked)
     bad.replace(bad.find("dwell_s: 4"), 10, "dwell_s: -1");
     EXPECT_THROW(Scenario::fromYamlText(bad, "bad.yaml"), ScenarioError);
 }
+
+TEST(RandomRoom, MoreAccessPointsKeepTheSeedsRoomAndDrive)
+{
+    RandomRoomOptions four = options();
+    four.accessPoints = 4;
+    const Scenario sc3 = randomRoomScenario(5, options()), sc4 = randomRoomScenario(5, four);
+    ASSERT_EQ(sc4.transmitters.size(), 4u);
+    for (size_t t = 0; t < 3; ++t)
+    {
+        EXPECT_EQ(sc4.transmitters[t].mac, sc3.transmitters[t].mac);
+        EXPECT_DOUBLE_EQ(sc4.transmitters[t].pose.x, sc3.transmitters[t].pose.x);
+        EXPECT_DOUBLE_EQ(sc4.transmitters[t].pose.y, sc3.transmitters[t].pose.y);
+    }
+    EXPECT_EQ(sc4.transmitters[3].mac.asString(), "02:00:00:00:0a:04");
+    // The fourth AP is new, near a wall, and the walls, receiver and drive are the seed's.
+    const auto& ap = sc4.transmitters[3].pose;
+    const double W = sc4.roomCorners[2].x, H = sc4.roomCorners[2].y;
+    EXPECT_LE(std::min({ap.x, ap.y, W - ap.x, H - ap.y}), 0.5 + 1e-9);
+    EXPECT_EQ(sc4.roomCorners.size(), sc3.roomCorners.size());
+    EXPECT_DOUBLE_EQ(W, sc3.roomCorners[2].x);
+    EXPECT_DOUBLE_EQ(sc4.receiver.bodyShadow.halfWidth_rad, sc3.receiver.bodyShadow.halfWidth_rad);
+    EXPECT_DOUBLE_EQ(sc4.motion.speed_mps, sc3.motion.speed_mps);
+    EXPECT_DOUBLE_EQ(sc4.motion.start.x, sc3.motion.start.x);
+    EXPECT_NE(randomRoomYaml(5, four), randomRoomYaml(6, four));
+
+    RandomRoomOptions two = options();
+    two.accessPoints = 2;
+    EXPECT_THROW(randomRoomYaml(5, two), std::invalid_argument);
+}

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <mrpt/containers/yaml.h>
 #include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/vector_loadsave.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
@@ -225,4 +226,15 @@ TEST(WifiSimApp, RandomRoom)
     EXPECT_NE(run("--random-room 1001 a.yaml " + dir + "/x.rawlog").exitCode, 0);
     EXPECT_NE(run("--random-room 0 " + dir + "/x.rawlog").exitCode, 0);
     EXPECT_NE(run("--write-scenario x.yaml a.yaml " + dir + "/x.rawlog").exitCode, 0);
+    // A fourth AP is added to the same room; fewer than three, or without a room, are refused.
+    const auto four =
+        run("--random-room 1001 " + dir + "/r4.rawlog -d 1 -q --aps 4 --write-scenario " + dir +
+            "/r4.yaml");
+    ASSERT_EQ(four.exitCode, 0) << four.output;
+    EXPECT_NE(
+        mrpt::io::file_get_contents(dir + "/r4.yaml").find("02:00:00:00:0a:04"), std::string::npos);
+    EXPECT_EQ(
+        mrpt::io::file_get_contents(dir + "/r.yaml").find("02:00:00:00:0a:04"), std::string::npos);
+    EXPECT_NE(run("--random-room 1001 " + dir + "/x.rawlog --aps 2").exitCode, 0);
+    EXPECT_NE(run("a.yaml " + dir + "/x.rawlog --aps 4").exitCode, 0);
 }

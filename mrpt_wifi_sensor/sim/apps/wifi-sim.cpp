@@ -64,6 +64,11 @@ int main(int argc, char** argv)
                 "every bin) or intel5300 (share/arrays/intel5300-linear-3.yaml, 159/40, the Intel "
                 "5300's 30 grouped subcarriers as int8, source iwl5300)",
                 false, "rt-ac86u", "NAME", cmd);
+            TCLAP::ValueArg<int> argAps(
+                "", "aps",
+                "With --random-room: access points (default 3; those beyond the third are added "
+                "to the seed's room, which stays the same)",
+                false, 3, "N", cmd);
             TCLAP::ValueArg<std::string> argWriteScenario(
                 "", "write-scenario", "With --random-room: also save the room as a scenario file",
                 false, "", "FILE.yaml", cmd);
@@ -102,6 +107,9 @@ int main(int argc, char** argv)
                 throw std::invalid_argument(
                     "--receiver needs --random-room (a scenario file sets receiver.array and "
                     "receiver.csi_format)");
+            if (argAps.isSet() && !argRandomRoom.isSet())
+                throw std::invalid_argument("--aps needs --random-room");
+            if (argAps.getValue() < 3) throw std::invalid_argument("--aps: at least 3");
             if (!sim::isRandomRoomReceiver(argReceiver.getValue()))
                 throw std::invalid_argument(
                     "--receiver: unknown receiver '" + argReceiver.getValue() +
@@ -116,6 +124,7 @@ int main(int argc, char** argv)
                 sim::RandomRoomOptions ro;
                 ro.arraysDir = arraysDir();
                 ro.receiver = argReceiver.getValue();
+                ro.accessPoints = argAps.getValue();
                 const std::string yaml = sim::randomRoomYaml(argRandomRoom.getValue(), ro);
                 scenario = sim::Scenario::fromYamlText(
                     yaml, "random-room-" + std::to_string(argRandomRoom.getValue()));

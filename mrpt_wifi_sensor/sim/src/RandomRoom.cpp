@@ -15,7 +15,8 @@ namespace mrpt_wifi::sim
 namespace
 {
 /** Salt of the room generator's stream, apart from the simulator's own tags. */
-constexpr uint64_t kTagRandomRoom = 0x524f4f4dULL;  // "ROOM"
+constexpr uint64_t kTagRandomRoom = 0x524f4f4dULL;         // "ROOM"
+constexpr uint64_t kTagExtraAccessPoints = 0x4150584eULL;  // "APXN"
 
 struct Point
 {
@@ -59,10 +60,18 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
     if (!isRandomRoomReceiver(options.receiver))
         throw std::invalid_argument(
             "unknown random-room receiver '" + options.receiver + "' (rt-ac86u or intel5300)");
+    if (options.accessPoints < 3 || options.accessPoints > 250)
+        throw std::invalid_argument(
+            "random room: " + std::to_string(options.accessPoints) + " access points (3 to 250)");
     const bool intel = options.receiver == "intel5300";
+    // Uniform reals in [a, b) and integers in [a, b] drawn from a generator.
+    const auto uniformFrom = [](mrpt::random::CRandomGenerator& g)
+    { return [&g](double a, double b) { return g.drawUniform(a, b); }; };
+    const auto integerFrom = [](mrpt::random::CRandomGenerator& g)
+    { return [&g](int a, int b) { return int(std::floor(g.drawUniform(a, b + 1 - 1e-9))); }; };
     mrpt::random::CRandomGenerator rng(detail::seed32(detail::hashKey({seed, kTagRandomRoom})));
-    auto U = [&](double a, double b) { return rng.drawUniform(a, b); };
-    auto I = [&](int a, int b) { return int(std::floor(rng.drawUniform(a, b + 1 - 1e-9))); };
+    const auto U = uniformFrom(rng);
+    const auto I = integerFrom(rng);
 
     const double W = U(6, 14), H = U(5, 10);
     std::ostringstream y;  // everything after the header (the duration of a loop comes last)
@@ -117,28 +126,35 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
     }
 
     // Access points near the walls, facing into the room within ±60°.
-    y << "\ntransmitters:\n";
-    for (int t = 0; t < 3; ++t)
+    const auto accessPoint = [&](int t, auto&& uniform, auto&& integer)
     {
-        const int wall = I(0, 3);
-        const double inset = U(0.2, 0.5);
+        const int wall = integer(0, 3);
+        const double inset = uniform(0.2, 0.5);
         Point p;
         double inward = 0;
-        if (wall == 0) p = {U(0.5, W - 0.5), inset}, inward = 90;
-        if (wall == 1) p = {W - inset, U(0.5, H - 0.5)}, inward = 180;
-        if (wall == 2) p = {U(0.5, W - 0.5), H - inset}, inward = -90;
-        if (wall == 3) p = {inset, U(0.5, H - 0.5)}, inward = 0;
-        const bool two = U(0, 1) < 0.5;
+        if (wall == 0) p = {uniform(0.5, W - 0.5), inset}, inward = 90;
+        if (wall == 1) p = {W - inset, uniform(0.5, H - 0.5)}, inward = 180;
+        if (wall == 2) p = {uniform(0.5, W - 0.5), H - inset}, inward = -90;
+        if (wall == 3) p = {inset, uniform(0.5, H - 0.5)}, inward = 0;
+        const bool two = uniform(0, 1) < 0.5;
         y << "  - name: ap" << t << "\n"
           << "    mac: '02:00:00:00:0a:" << std::hex << std::setw(2) << std::setfill('0') << (t + 1)
           << std::dec << std::setfill(' ') << "'\n"
           << "    position: " << pt(p) << "\n"
-          << "    yaw_deg: " << inward + U(-60, 60) << "\n"
+          << "    yaw_deg: " << inward + uniform(-60, 60) << "\n"
           << "    channel: " << (intel ? "159/40" : "155/80") << "\n"
           << "    streams: " << (two ? 2 : 1) << "\n";
         if (two) y << "    array: " << options.arraysDir << "/ap-linear-2.yaml\n";
         y << "    frame_rate_hz: 50\n";
-    }
+    };
+    y << "\ntransmitters:\n";
+    for (int t = 0; t < 3; ++t) accessPoint(t, U, I);
+    // Further APs come from their own stream: the room, its first three APs and the drive stay
+    // those of the seed.
+    mrpt::random::CRandomGenerator extraRng(
+        detail::seed32(detail::hashKey({seed, kTagRandomRoom, kTagExtraAccessPoints})));
+    for (int t = 3; t < options.accessPoints; ++t)
+        accessPoint(t, uniformFrom(extraRng), integerFrom(extraRng));
 
     y << "\nreceiver:\n  label: WIFI_CSI\n  array: " << options.arraysDir
       << (intel ? "/intel5300-linear-3.yaml\n  csi_format: intel5300\n" : "/rt-ac86u.yaml\n")

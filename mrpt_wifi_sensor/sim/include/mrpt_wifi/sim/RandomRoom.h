@@ -34,6 +34,9 @@ struct RandomRoomOptions
     /** The odometry's systematic errors (scenario keys `scale_error`, `yaw_scale_error`,
      *  `yaw_drift_deg_per_m`); the random room itself has none. */
     double odometryScaleError = 0, odometryYawScaleError = 0, odometryYawDrift_deg_per_m = 0;
+    /** Access points (≥ 3). Those beyond the third are drawn from a stream of their own, so a
+     *  seed keeps its room, first three APs and drive whatever the count. */
+    int accessPoints = 3;
 };
 
 /** The receivers randomRoomYaml() knows ("rt-ac86u", "intel5300"). */
@@ -42,10 +45,11 @@ bool isRandomRoomReceiver(const std::string& name);
 /** A random office-like room as scenario YAML text (share/scenarios/README.md, "Random rooms",
  *  documents the distribution): a 6–14 × 5–10 m rectangle with walls of random reflectivity,
  *  rough walls (weak scatterers just in front of them), 1–3 clusters of 3–5 scatterers, 1–3
- *  pieces of furniture (attenuating segments with scattering edges), 3 access points near the
- *  walls facing into the room at random yaw (one or two streams), the robot's body shadowing
- *  one side of its receive array, and a robot that drives to random goals and stops at each
- *  for up to 4 s. Every draw is a function of the seed. */
+ *  pieces of furniture (attenuating segments with scattering edges), 3 access points (or
+ *  options.accessPoints) near the walls facing into the room at random yaw (one or two
+ *  streams), the robot's body shadowing one side of its receive array, and a robot that
+ *  drives to random goals and stops at each for up to 4 s. Every draw is a function of the
+ *  seed. */
 std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options = {});
 
 /** The same, parsed (validated like any scenario file). */
