@@ -306,24 +306,19 @@ int main(int argc, char** argv)
                     processor.addOdometry(
                         mrpt::Clock::fromDouble(tumOdometry[nextTum].first),
                         tumOdometry[nextTum].second);
-                // A peer's recording of this robot (estimator sar) is input, not a transmitter.
-                if (const auto peer = cfg.window.peerRecordings.find(c.sensorLabel);
-                    peer != cfg.window.peerRecordings.end())
-                {
-                    ++peerRecordingFrames[peer->first];
-                    RejectReason why;
-                    processor.process(c, &why);
-                    if (why != RejectReason::Accepted) ++rejected[size_t(why)];
-                    return;
-                }
-                auto& st = stats[c.transmitter];
-                ++st.frames;
+                // A peer's recording of this robot (estimator sar) is input, not a transmitter:
+                // the processor keeps it and gives no bearing for it.
+                if (cfg.window.peerRecordings.count(c.sensorLabel))
+                    ++peerRecordingFrames[c.sensorLabel];
+                else
+                    ++stats[c.transmitter].frames;
                 RejectReason why;
                 auto b = processor.process(c, &why);
                 if (why != RejectReason::Accepted) ++rejected[size_t(why)];
                 for (auto& n : processor.preprocessor().takeChainStateNotices())
                     chainStateNotices.push_back(std::move(n));
                 if (!b) return;
+                auto& st = stats[c.transmitter];
                 ++bearingsTotal;
                 ++st.bearings;
                 st.aoa_deg.push_back(b->aoa_rad * toDeg);
