@@ -626,6 +626,9 @@ int main(int argc, char** argv)
             tum << "# wifi-localize estimate (PF mean, with odometry refined by the window "
                    "smoother): t x y z qx qy qz qw\n"
                 << std::flush;
+            // The filter's own mean as well, as wifi-pf-localization keeps it.
+            std::ofstream pfTum(outDir + "/pf_estimate_tum.txt");
+            pfTum << "# wifi-localize particle filter mean: t x y z qx qy qz qw\n" << std::flush;
             // The same poses with their uncertainty (LiveLocalizer::uncertainty(): reported, then
             // the particles' alone), so a user can check that it covers the error and weigh the
             // estimate when fusing it.
@@ -721,9 +724,14 @@ int main(int argc, char** argv)
                 ++poseOutputs;
                 ++secPoses;
                 est.push_back(t, m);
-                tum << fmt(t, 6) << " " << fmt(m.x, 4) << " " << fmt(m.y, 4) << " 0 0 0 "
-                    << fmt(std::sin(m.phi / 2), 6) << " " << fmt(std::cos(m.phi / 2), 6)
-                    << std::endl;  // flushed per line
+                const auto tumLine = [t](std::ostream& o, const mrpt::math::TPose2D& p)
+                {
+                    o << fmt(t, 6) << " " << fmt(p.x, 4) << " " << fmt(p.y, 4) << " 0 0 0 "
+                      << fmt(std::sin(p.phi / 2), 6) << " " << fmt(std::cos(p.phi / 2), 6)
+                      << std::endl;  // flushed per line
+                };
+                tumLine(tum, m);
+                tumLine(pfTum, loc.mean());
                 const auto u = loc.uncertainty();
                 const auto& c = u.reported;
                 estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
@@ -784,6 +792,11 @@ int main(int argc, char** argv)
                         ++nOdo;
                         loc.addOdometry(*odo);
                         if (mapper.enabled()) mapper.addOdometry(*odo);
+                        // Our bearing chain, as csi-bearings', combines only the frames taken
+                        // near the newest; without odometry it would combine a window's frames
+                        // as if the robot stood still.
+                        if (fallback)
+                            fallback->addOdometry(odo->timestamp, odo->odometry.asTPose());
                     }
                     else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
                     {
@@ -912,8 +925,16 @@ int main(int argc, char** argv)
                         ? std::string("none")
                         : std::to_string(sensorBearingLabels.size()) + " sensor(s)")
                 << " with own bearings), " << nOther << " other\n"
-                << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n"
-                << "  bearings used  : " << loc.bearingsUsed()
+                << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n";
+            if (nFallback > 0)
+                sum << "  bearing chain  : "
+                    << (fallback->hasOdometry() ? "odometry given: a window holds only the frames "
+                                                  "taken near the newest, as "
+                                                  "in csi-bearings"
+                                                : "no odometry: a window's frames are combined as "
+                                                  "if the robot stood still")
+                    << "\n";
+            sum << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
                 << "  filter steps   : " << loc.steps() << "\n"
                 << "  pose outputs   : " << poseOutputs << " ("
