@@ -730,9 +730,9 @@ int main(int argc, char** argv)
                       << fmt(std::sin(p.phi / 2), 6) << " " << fmt(std::cos(p.phi / 2), 6)
                       << std::endl;  // flushed per line
                 };
-                tumLine(tum, m);
-                tumLine(pfTum, loc.mean());
                 const auto u = loc.uncertainty();
+                tumLine(tum, m);
+                tumLine(pfTum, u.particlesMean);
                 const auto& c = u.reported;
                 estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
                 covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","

@@ -231,8 +231,8 @@ mrpt::math::TPose2D LiveLocalizer::mean() const
 
 LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
 {
-    const auto particles = std::get<0>(pdf_.getCovarianceAndMean());
-    Uncertainty u{particles, particles};
+    const auto [particles, mean] = pdf_.getCovarianceAndMean();
+    Uncertainty u{particles, particles, mean.asTPose()};
     if (!(opts_.bearingBiasStd_deg > 0)) return u;
     // A transmitter heard in the last few seconds constrains the pose now.
     const double kHeardWithin_s = 5.0;

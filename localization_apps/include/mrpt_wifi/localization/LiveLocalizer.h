@@ -108,8 +108,10 @@ public:
          *  common error. Alone its 95 % ellipse held 25-77 % of the errors after convergence
          *  with odometry (development rooms 1-10, live). */
         mrpt::math::CMatrixDouble33 reported;
+        /** The particles' weighted mean (mean()), from the same pass. */
+        mrpt::math::TPose2D particlesMean;
     };
-    /** One pass over the particles for both. */
+    /** One pass over the particles for all three. */
     Uncertainty uncertainty() const;
     /** Timestamp of the newest bearing of the last step [s, UNIX]. */
     double lastStepTime() const { return lastStepTime_; }
