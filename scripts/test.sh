@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Installs what is needed, builds, and runs every test:
 #   1. the GoogleTest suites and integration tests with Debian's MRPT apps (Release build);
-#   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer;
-#   3. the libFuzzer targets (clang): the Nexmon parser + frame assembler, one per CSI file
-#      decoder (nexmon, intel5300, esp32, atheros) and WiROS's ROS messages, FUZZ_SECONDS split
-#      between them.
+#   2. the unit suites again under AddressSanitizer + UndefinedBehaviorSanitizer (clang);
+#   3. the libFuzzer targets from the same build: the Nexmon parser + frame assembler, one per
+#      CSI file decoder (nexmon, intel5300, esp32, atheros) and WiROS's ROS messages,
+#      FUZZ_SECONDS split between them.
 # Ends with one line "summary: N passed, N failed". Exit code non-zero if anything failed.
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -30,11 +30,13 @@ else
   echo "Release build FAILED"; failed=$((failed + 1))
 fi
 
-echo "== [2/3] ASan + UBSan build, unit suites"
-# The unit suites of every library, instrumented. Integration tests load our (instrumented)
-# plugin into Debian's uninstrumented MRPT apps, which ASan does not allow: they ran in step 1.
-# Line tables only (-g1): ASan's reports keep file:line, and the build takes much less time
-# than with full debug information (CI's budget is 30 minutes).
+echo "== [2/3] ASan + UBSan build (clang), unit suites"
+# One instrumented clang build serves the unit suites and the fuzz targets: the libraries carry
+# libFuzzer's coverage hooks (-fsanitize=fuzzer-no-link), which cost the unit suites little, and
+# only the fuzz executables link libFuzzer's main. (Two builds cost CI's 30 minutes ~5 more.)
+# Integration tests load our (instrumented) plugin into Debian's uninstrumented MRPT apps, which
+# ASan does not allow: they ran in step 1. Line tables only (-g1): ASan's reports keep
+# file:line, and the build takes much less time than with full debug information.
 debug_lines=(-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG")
 # Two end-to-end calibration drives take 40-55 s each under ASan and exercise the same code as
 # TxChainCalibration.RecoversInjectedOffsetsFromTruePoses (which does run): step 1 runs them.
@@ -42,48 +44,48 @@ asan_skip="TxChainCalibration[.](AodOnlyWhereCalibratedAndHonestSigma|ReceiverFr
 asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization test_sar"
 # The decoders' length-check seeds, replayed instrumented (FuzzSeeds.*).
 asan_targets="$asan_targets fuzz_make_seeds fuzz_replay_nexmon fuzz_replay_intel5300 fuzz_replay_esp32 fuzz_replay_atheros fuzz_replay_rosmessages"
-if cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" -DMRPT_WIFI_SANITIZE=ON \
-     -DMRPT_WIFI_BUILD_BENCHMARKS=OFF >/dev/null &&
-   cmake --build build-asan -j"$(nproc)" --target $asan_targets; then
+# The fuzz time is split between the assembler and one target per file decoder, so the total
+# stays FUZZ_SECONDS.
+fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros fuzz_ros_messages"
+san_built=false
+if CC=clang CXX=clang++ cmake -S . -B build-san -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" \
+     -DMRPT_WIFI_SANITIZE=ON -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
+     -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link" >/dev/null &&
+   cmake --build build-san -j"$(nproc)" --target $asan_targets $fuzz_targets; then
+  san_built=true
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan --output-on-failure -j2 -L "unit|sim|bearings|calib|localization" \
-      -LE integration -E "_NOT_BUILT|$asan_skip" --timeout 900 2>&1 | tee build-asan/ctest.log
-  count_ctest build-asan/ctest.log
+    ctest --test-dir build-san --output-on-failure -j2 -L "unit|sim|bearings|calib|localization" \
+      -LE integration -E "_NOT_BUILT|$asan_skip" --timeout 900 2>&1 | tee build-san/ctest.log
+  count_ctest build-san/ctest.log
 else
   echo "ASan build FAILED"; failed=$((failed + 1))
 fi
 
-# The fuzz time is split between the assembler and one target per file decoder, so the total
-# stays FUZZ_SECONDS.
-fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros fuzz_ros_messages"
 per_target=$(( FUZZ_SECONDS / 5 > 0 ? FUZZ_SECONDS / 5 : 1 ))
 echo "== [3/3] libFuzzer: Nexmon assembler + nexmon/intel5300/esp32/atheros decoders, ${per_target} s each"
-if CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" \
-     -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
-     -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined" >/dev/null &&
-   cmake --build build-fuzz -j"$(nproc)" --target $fuzz_targets fuzz_make_seeds; then
+if $san_built; then
   for target in $fuzz_targets; do
-    corpus=build-fuzz/corpus-$target
+    corpus=build-san/corpus-$target
     rm -rf "$corpus"; mkdir -p "$corpus"
     case $target in
-      fuzz_nexmon_assembler) build-fuzz/bin/fuzz_make_seeds "$corpus" ;;
-      fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" nexmon tests/data ;;
-      fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" intel5300 tests/data ;;
-      fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" esp32 tests/data ;;
-      fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ && build-fuzz/bin/fuzz_make_seeds "$corpus" atheros tests/data ;;
-      fuzz_ros_messages) build-fuzz/bin/fuzz_make_seeds "$corpus" rosmessages tests/data ;;
+      fuzz_nexmon_assembler) build-san/bin/fuzz_make_seeds "$corpus" ;;
+      fuzz_decoder_nexmon) cp tests/data/nexmon/*.pcap "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" nexmon tests/data ;;
+      fuzz_decoder_intel5300) cp tests/data/intel5300/*.dat "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" intel5300 tests/data ;;
+      fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" esp32 tests/data ;;
+      fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" atheros tests/data ;;
+      fuzz_ros_messages) build-san/bin/fuzz_make_seeds "$corpus" rosmessages tests/data ;;
     esac
     # tests/fuzz/fuzz_csi_decoder.cpp says why non-capture inputs are read as this project's
     # class only (MRPT's other classes allocate whatever a damaged count claims).
-    if build-fuzz/bin/$target -max_total_time="$per_target" -max_len=20000 \
-         -print_final_stats=1 "$corpus" >build-fuzz/$target.log 2>&1; then
-      tail -3 build-fuzz/$target.log; echo "fuzz $target: no crash in ${per_target} s"; passed=$((passed + 1))
+    if build-san/bin/$target -max_total_time="$per_target" -max_len=20000 \
+         -print_final_stats=1 "$corpus" >build-san/$target.log 2>&1; then
+      tail -3 build-san/$target.log; echo "fuzz $target: no crash in ${per_target} s"; passed=$((passed + 1))
     else
-      tail -40 build-fuzz/$target.log; echo "fuzz $target: FAILED"; failed=$((failed + 1))
+      tail -40 build-san/$target.log; echo "fuzz $target: FAILED"; failed=$((failed + 1))
     fi
   done
 else
-  echo "fuzz build FAILED"; failed=$((failed + 1))
+  echo "fuzz targets not built (see the ASan build above)"; failed=$((failed + 1))
 fi
 
 echo "summary: ${passed} passed, ${failed} failed"

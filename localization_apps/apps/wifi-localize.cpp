@@ -25,6 +25,7 @@
 #include <mrpt/opengl/CText.h>
 #include <mrpt/opengl/CTexturedPlane.h>
 #include <mrpt/opengl/stock_objects.h>
+#include <mrpt/random/RandomGenerators.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt/system/os.h>
@@ -36,6 +37,8 @@
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
+#include <mrpt_wifi/sensor/CWiFiCSISensor.h>
+#include <mrpt_wifi/sensor/LiveBearingWorker.h>
 
 #include <array>
 #include <atomic>
@@ -78,6 +81,8 @@ struct SensorRunner
     mrpt::hwdrivers::CGenericSensor::Ptr sensor;
     std::thread thread;
     std::string error;  // set by the thread when doProcess() throws
+    /** A CSI sensor's own bearing chain (`bearing_algorithm` set), or nullptr. */
+    mrpt_wifi::LiveBearingWorker* bearingWorker = nullptr;
 
     void start(const std::atomic<bool>& stop)
     {
@@ -573,6 +578,11 @@ int main(int argc, char** argv)
                 "With map_devices: true device positions (transmitters YAML): errors in the "
                 "summary",
                 false, "", "TX.yaml", cmd);
+            TCLAP::ValueArg<unsigned> argSeed(
+                "", "seed",
+                "Seed of the particle filter's random numbers, as wifi-pf-localization --seed: "
+                "two runs then differ only in how the clock batched the observations",
+                false, 1, "N", cmd);
             TCLAP::SwitchArg argView("", "view", "Live 3-D window", cmd);
             TCLAP::ValueArg<std::string> argShot(
                 "", "screenshot", "With --view: save the window to this PNG at the end", false, "",
@@ -594,6 +604,8 @@ int main(int argc, char** argv)
                 throw std::runtime_error("cannot read '" + iniPath + "'");
             mrpt::config::CConfigFile ini(iniPath);
             const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
+            // Before the filter draws its first particles (MRPT seeds from the clock).
+            mrpt::random::getRandomGenerator().randomize(argSeed.getValue());
             LiveLocalizer loc(ini, iniDir);
             if (loc.areaFromInitialPdf())
                 std::cerr
@@ -658,7 +670,12 @@ int main(int argc, char** argv)
                 sensors.push_back(std::move(r));
             }
             // Every section checked before any sensor starts (opens sockets, replays, ...).
-            for (auto& r : sensors) r->sensor->initialize();
+            for (auto& r : sensors)
+            {
+                r->sensor->initialize();
+                if (auto* csiSensor = dynamic_cast<CWiFiCSISensor*>(r->sensor.get()))
+                    r->bearingWorker = csiSensor->bearingWorker();
+            }
             if (sensors.empty())
                 throw std::runtime_error(
                     iniPath + ": no sensor section (a section with `driver = ...`)");
@@ -797,6 +814,12 @@ int main(int argc, char** argv)
                         // as if the robot stood still.
                         if (fallback)
                             fallback->addOdometry(odo->timestamp, odo->odometry.asTPose());
+                        // So does a CSI sensor's own chain (rawlog-grabber has no way to give
+                        // it the odometry of another sensor; here we do).
+                        for (auto& sr : sensors)
+                            if (sr->bearingWorker)
+                                sr->bearingWorker->addOdometry(
+                                    odo->timestamp, odo->odometry.asTPose());
                     }
                     else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(obs))
                     {
@@ -934,6 +957,16 @@ int main(int argc, char** argv)
                                                 : "no odometry: a window's frames are combined as "
                                                   "if the robot stood still")
                     << "\n";
+            for (const auto& sr : sensors)
+                if (sr->bearingWorker)
+                    sum << "  sensor chain   : [" << sr->section << "] "
+                        << (sr->bearingWorker->stats().odometry > 0
+                                ? std::to_string(sr->bearingWorker->stats().odometry) +
+                                      " odometry readings given: a window holds only the frames "
+                                      "taken near the newest"
+                                : std::string("no odometry: a window's frames are combined as "
+                                              "if the robot stood still"))
+                        << "\n";
             sum << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
                 << "  filter steps   : " << loc.steps() << "\n"

@@ -164,6 +164,16 @@ void LiveBearingWorker::submit(CObservationWiFiCSI::Ptr frame)
     wake_.notify_one();
 }
 
+void LiveBearingWorker::addOdometry(mrpt::Clock::time_point t, const mrpt::math::TPose2D& odometry)
+{
+    // Bounded while no frame comes: the chain keeps only the last seconds of odometry anyway.
+    constexpr size_t kMaxPending = 4096;
+    std::lock_guard<std::mutex> lk(mutex_);
+    if (odometry_.size() >= kMaxPending)
+        odometry_.erase(odometry_.begin(), odometry_.begin() + long(kMaxPending / 2));
+    odometry_.emplace_back(t, odometry);
+}
+
 void LiveBearingWorker::takeReady(std::vector<mrpt::obs::CObservation::Ptr>& out)
 {
     std::lock_guard<std::mutex> lk(mutex_);
@@ -189,6 +199,7 @@ void LiveBearingWorker::run()
     for (;;)
     {
         std::shared_ptr<Slot> slot;
+        std::vector<std::pair<mrpt::Clock::time_point, mrpt::math::TPose2D>> odometry;
         {
             std::unique_lock<std::mutex> lk(mutex_);
             wake_.wait(lk, [this] { return stop_ || !work_.empty(); });
@@ -196,7 +207,11 @@ void LiveBearingWorker::run()
             slot = std::move(work_.front());
             work_.pop_front();
             ++busy_;
+            odometry.swap(odometry_);
+            stats_.odometry += odometry.size();
         }
+        // The chain is this thread's alone: the odometry joins it here, before the frame.
+        for (const auto& [t, pose] : odometry) processor_->addOdometry(t, pose);
         estimate(*slot);
         {
             std::lock_guard<std::mutex> lk(mutex_);

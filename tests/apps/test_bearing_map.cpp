@@ -218,6 +218,10 @@ TEST(BearingMapParticleFilter, GlobalLocalizationConverges)
     const auto apsFile = writeTemp("aps.yaml", aps.asYamlText());
     auto mm = std::make_shared<mrpt::maps::CMultiMetricMap>(mapFromIni(iniFor(apsFile)));
 
+    // Seeded: MRPT's global generator starts from the clock. Plain MCL has no recovery (the
+    // apps add ParticleRecovery), so a start that resamples onto a wrong mode stays there: over
+    // seeds 1-30, seed 3 held one 4.5 m off and the other 29 converged.
+    mrpt::random::getRandomGenerator().randomize(1);
     mrpt::slam::CMonteCarloLocalization2D pdf;
     pdf.options.metricMap = mm;
     pdf.resetUniform(0, 10, 0, 5, -M_PI, M_PI, 2000);

@@ -78,6 +78,15 @@ TEST(LocalizationAppsCli, HelpWorks)
         EXPECT_EQ(r.rc, 0) << app << ": " << r.out;
         EXPECT_NE(r.out.find("USAGE"), std::string::npos) << app;
     }
+    // Both particle filters take a seed (MRPT seeds its generator from the clock), and a seed
+    // that is not a number is refused before any work.
+    for (const char* app : {"wifi-pf-localization", "wifi-localize"})
+    {
+        EXPECT_NE(run(kBin + "/" + app + " --help").out.find("--seed"), std::string::npos) << app;
+        const auto bad = run(kBin + "/" + app + " --seed many " + kIni);
+        EXPECT_NE(bad.rc, 0) << app << ": " << bad.out;
+        EXPECT_NE(bad.out.find("seed"), std::string::npos) << app << ": " << bad.out;
+    }
 }
 
 TEST(LocalizationAppsPf, WifiPfLocalizationOnCsvInput)

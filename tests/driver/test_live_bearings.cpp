@@ -153,6 +153,46 @@ TEST(LiveBearingWorker, SameObservationsAsTheOfflineChainInOrder)
     }
 }
 
+TEST(LiveBearingWorker, OdometryLimitsTheWindowAsInTheOfflineChain)
+{
+    // The robot moves 0.1 m per frame (frames of the 4 APs interleave): given the odometry, a
+    // window holds only the frames within 0.15 m of the newest, in the worker exactly as in
+    // csi-bearings' chain; without it, every frame of the window is combined.
+    const auto frames = sampleFrames();
+    auto settings = settingsFor("aoa_only");
+    settings.optionsFile = "{window: 8}";
+    auto offline = makeLiveBearingProcessor(settings);
+    auto still = makeLiveBearingProcessor(settings);
+    LiveBearingWorker worker(makeLiveBearingProcessor(settings), settings);
+    std::vector<CObservationWiFiBearing::Ptr> expected, unlimited;
+    for (size_t i = 0; i < frames.size(); ++i)
+    {
+        const mrpt::math::TPose2D odometry(0.1 * double(i), 0, 0);
+        offline->addOdometry(frames[i]->timestamp, odometry);
+        worker.addOdometry(frames[i]->timestamp, odometry);
+        if (auto b = offline->process(*frames[i])) expected.push_back(b);
+        if (auto b = still->process(*frames[i])) unlimited.push_back(b);
+        worker.submit(frames[i]);
+    }
+    ASSERT_TRUE(worker.waitIdle(30.0));
+    std::vector<mrpt::obs::CObservation::Ptr> out;
+    worker.takeReady(out);
+    std::vector<CObservationWiFiBearing::Ptr> live;
+    for (const auto& o : out)
+        if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(o)) live.push_back(b);
+    EXPECT_EQ(worker.stats().odometry, frames.size());
+    ASSERT_EQ(live.size(), expected.size());
+    ASSERT_FALSE(live.empty());
+    size_t fewerFrames = 0;
+    for (size_t i = 0; i < live.size(); ++i)
+    {
+        expectSameBearing(*live[i], *expected[i]);
+        EXPECT_LE(live[i]->framesUsed, 2u) << i;
+        if (i < unlimited.size() && live[i]->framesUsed < unlimited[i]->framesUsed) ++fewerFrames;
+    }
+    EXPECT_GE(fewerFrames, live.size() / 2);  // without odometry they grow to the window's 8
+}
+
 TEST(LiveBearingWorker, AFullQueueSkipsEstimationButDeliversEveryFrameInOrder)
 {
     const auto frames = sampleFrames();

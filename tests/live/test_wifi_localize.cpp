@@ -335,6 +335,11 @@ TEST(WifiLocalize, UsesTheCsiSensorsOwnLiveBearings)
         r.result.output.find("(0 computed by wifi-localize, 1 sensor(s) with own bearings)"),
         std::string::npos)
         << r.result.output;
+    // The sensor's chain got the odometry from wifi-localize, as csi-bearings' chain does.
+    EXPECT_TRUE(std::regex_search(
+        r.result.output,
+        std::regex(R"(sensor chain   : \[WIFI_CSI\] [1-9][0-9]* odometry readings given)")))
+        << r.result.output;
     std::smatch m;
     ASSERT_TRUE(std::regex_search(r.result.output, m, std::regex("bearings used  : ([0-9]+)")))
         << r.result.output;

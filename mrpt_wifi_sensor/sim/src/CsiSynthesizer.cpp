@@ -37,18 +37,22 @@ float reducedAngle(double cycles)
     return float(-2.0 * M_PI * frac);
 }
 
-/** Eight float lanes: one AVX register, or two SSE ones. `lanes(p)` views 8 floats at any
- *  float address as one (by reference: passing vectors by value would depend on the ISA). */
+/** Eight float lanes: one AVX register, or two SSE ones. Loaded from and added to any float
+ *  address by memcpy, which compilers turn into unaligned vector moves (an under-aligned vector
+ *  typedef is honoured by GCC, not by clang: its aligned moves faulted). Always inlined and
+ *  by reference: a vector passed by value would depend on the ISA of each target clone. */
 typedef float Lanes8 __attribute__((vector_size(32)));
-typedef float Unaligned8 __attribute__((vector_size(32), aligned(4), may_alias));
 constexpr unsigned kLanes = 8;
-inline Unaligned8& lanes(float* p)
+__attribute__((always_inline)) inline void load8(Lanes8& v, const float* p)
 {
-    return *reinterpret_cast<Unaligned8*>(p);
+    std::memcpy(&v, p, sizeof v);
 }
-inline const Unaligned8& lanes(const float* p)
+__attribute__((always_inline)) inline void addTo8(float* p, const Lanes8& v)
 {
-    return *reinterpret_cast<const Unaligned8*>(p);
+    Lanes8 sum;
+    load8(sum, p);
+    sum += v;
+    std::memcpy(p, &sum, sizeof sum);
 }
 
 /** The hot loop, for one chunk of 8 (stream, chain) pairs: acc[b][lane] += Σ_p z_p · step_p^b.
@@ -61,14 +65,15 @@ __attribute__((target_clones("avx2", "default"))) void accumulateChunk(
     unsigned p = 0;
     for (; p + 1 < nPaths; p += 2)
     {
-        Lanes8 ar = lanes(z0Re + p * kLanes), ai = lanes(z0Im + p * kLanes);
-        Lanes8 br = lanes(z0Re + (p + 1) * kLanes), bi = lanes(z0Im + (p + 1) * kLanes);
-        const Lanes8 sar = lanes(stepRe + p * kLanes), sai = lanes(stepIm + p * kLanes);
-        const Lanes8 sbr = lanes(stepRe + (p + 1) * kLanes), sbi = lanes(stepIm + (p + 1) * kLanes);
+        Lanes8 ar, ai, br, bi, sar, sai, sbr, sbi;
+        load8(ar, z0Re + p * kLanes), load8(ai, z0Im + p * kLanes);
+        load8(br, z0Re + (p + 1) * kLanes), load8(bi, z0Im + (p + 1) * kLanes);
+        load8(sar, stepRe + p * kLanes), load8(sai, stepIm + p * kLanes);
+        load8(sbr, stepRe + (p + 1) * kLanes), load8(sbi, stepIm + (p + 1) * kLanes);
         for (unsigned b = 0; b < nBins; ++b)
         {
-            lanes(accRe + b * kLanes) += ar + br;
-            lanes(accIm + b * kLanes) += ai + bi;
+            addTo8(accRe + b * kLanes, ar + br);
+            addTo8(accIm + b * kLanes, ai + bi);
             const Lanes8 nar = ar * sar - ai * sai;
             ai = ar * sai + ai * sar;
             ar = nar;
@@ -79,12 +84,13 @@ __attribute__((target_clones("avx2", "default"))) void accumulateChunk(
     }
     for (; p < nPaths; ++p)
     {
-        Lanes8 ar = lanes(z0Re + p * kLanes), ai = lanes(z0Im + p * kLanes);
-        const Lanes8 sar = lanes(stepRe + p * kLanes), sai = lanes(stepIm + p * kLanes);
+        Lanes8 ar, ai, sar, sai;
+        load8(ar, z0Re + p * kLanes), load8(ai, z0Im + p * kLanes);
+        load8(sar, stepRe + p * kLanes), load8(sai, stepIm + p * kLanes);
         for (unsigned b = 0; b < nBins; ++b)
         {
-            lanes(accRe + b * kLanes) += ar;
-            lanes(accIm + b * kLanes) += ai;
+            addTo8(accRe + b * kLanes, ar);
+            addTo8(accIm + b * kLanes, ai);
             const Lanes8 nar = ar * sar - ai * sai;
             ai = ar * sai + ai * sar;
             ar = nar;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <mrpt/core/Clock.h>
+#include <mrpt/math/TPose2D.h>
 #include <mrpt/obs/CObservation.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
@@ -63,6 +64,7 @@ public:
         uint64_t skipped = 0;            //!< the queue was full: no estimation
         uint64_t rejected = 0;           //!< refused by preprocessing (RSSI, streams, ...)
         uint64_t calibrationErrors = 0;  //!< the calibration does not fit the frame
+        uint64_t odometry = 0;           //!< odometry readings handed to the chain
     };
     /** Frame complete (submit) → bearing ready, over the frames estimated since the last call. */
     struct Latency
@@ -85,6 +87,11 @@ public:
 
     /** Hands a complete frame over (capture thread; never blocks on estimation). */
     void submit(CObservationWiFiCSI::Ptr frame);
+    /** Robot odometry (any thread, time order), as csi-bearings gives its chain: a window then
+     *  combines only the frames taken near the newest (bearing::BearingProcessor::addOdometry).
+     *  Handed to the chain before the next frame's estimation. Without it a moving robot's
+     *  window is combined as if it stood still. */
+    void addOdometry(mrpt::Clock::time_point t, const mrpt::math::TPose2D& odometry);
     /** Appends the frames that are done, each followed by its bearing observations. */
     void takeReady(std::vector<mrpt::obs::CObservation::Ptr>& out);
     /** Waits (at most `timeout_s`) until every submitted frame is done; true if they are. */
@@ -119,7 +126,9 @@ private:
     std::condition_variable wake_, idle_;
     std::deque<std::shared_ptr<Slot>> order_;  //!< every submitted frame not yet taken
     std::deque<std::shared_ptr<Slot>> work_;   //!< waiting for estimation
-    size_t busy_ = 0;                          //!< being estimated
+    std::vector<std::pair<mrpt::Clock::time_point, mrpt::math::TPose2D>> odometry_;  //!< not yet
+                                                                                     //!< given
+    size_t busy_ = 0;  //!< being estimated
     bool stop_ = false;
     Stats stats_;
     std::vector<double> latencies_s_;
