@@ -32,8 +32,8 @@ fi
 
 echo "== [2/3] ASan + UBSan build (clang), unit suites"
 # One instrumented clang build serves the unit suites and the fuzz targets: the libraries carry
-# libFuzzer's coverage hooks (-fsanitize=fuzzer-no-link), which cost the unit suites little, and
-# only the fuzz executables link libFuzzer's main. (Two builds cost CI's 30 minutes ~5 more.)
+# libFuzzer's coverage hooks (-fsanitize=fuzzer-no-link), which cost the unit suites ~30 s, and
+# only the fuzz executables link libFuzzer's main. (A separate fuzz build took ~5 min of CI's 30.)
 # Integration tests load our (instrumented) plugin into Debian's uninstrumented MRPT apps, which
 # ASan does not allow: they ran in step 1. Line tables only (-g1): ASan's reports keep
 # file:line, and the build takes much less time than with full debug information.

@@ -2,7 +2,7 @@
  * judged on its own (issue 19.3), as bearing-accuracy --rooms does for the bearings.
  *
  *   localization-accuracy --rooms N [--eval] [--first-seed S] [--work DIR] [--no-live]
- *                         [--aps N] ...
+ *                         [--aps N] [--live-chain app|sensor] ...
  *
  * Per room (sim::randomRoomYaml, with odometry errors drawn from a realistic range):
  *  - bearings through the real chain: wifi-sim → csi-bearings (`default`, the receiver
@@ -60,6 +60,9 @@ struct Options
     unsigned laps = 3;
     int particles = 3000;
     bool live = true;
+    /** Who computes the live bearings: wifi-localize's own chain ("app") or the CSI sensor's
+     *  (`bearing_*` keys in its section, "sensor"); the same estimator, calibration and arrays. */
+    std::string liveChain = "app";
     double convergedThreshold_m = 1.0, convergedHold_s = 5.0;  // the apps' defaults
 };
 
@@ -397,7 +400,8 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
 }
 
 /** wifi-localize on the room streamed by the emulator in real time (CSI and, with odometry,
- *  the odometry stream), its own bearing chain as csi-bearings runs it. */
+ *  the odometry stream), the bearings from its own chain or the CSI sensor's (Options::liveChain),
+ *  configured as csi-bearings runs it. */
 void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Options& o)
 {
     const auto scenario = (dir / "kidnapped" / "scenario.yaml").string();
@@ -408,25 +412,34 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
         if (odoPort == csiPort) odoPort = uint16_t(csiPort + 1);
         const auto out = dir / (odo == 0 ? "live-odometry" : "live-no-odometry");
         const std::string ini = out.string() + ".ini";
+        // wifi-localize's chain is always configured (it is built either way); with the
+        // sensor's, wifi-localize uses that sensor's bearings instead. The sensor takes its
+        // transmit arrays as a list (`[MAC=]FILE`): one default here.
+        std::map<std::string, std::string> keys = {
+            {"WIFI_CSI/udp_port", std::to_string(csiPort)},
+            {"ODOMETRY/udp_port", std::to_string(odoPort)},
+            {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
+             (dir / "kidnapped" / "truth" / "transmitters.yaml").string()},
+            {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aoa", "true"},
+            {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aod", "false"},
+            {"LocalizationExperiment/particles_count", std::to_string(o.particles)},
+            {"LocalizationExperiment/init_PDF_max_x", fmt(room.width, 3)},
+            {"LocalizationExperiment/init_PDF_max_y", fmt(room.depth, 3)},
+            {"KLD_options/KLD_minSampleSize", std::to_string(o.particles)},
+            {"KLD_options/KLD_maxSampleSize", std::to_string(o.particles)},
+            // the robot's top speed, as --max-speed offline (the offline [UnknownMotion])
+            {"UnknownMotion/max_speed_mps", fmt(room.speed, 3)}};
+        for (const std::string chain : {"wifi-localize", "WIFI_CSI"})
+        {
+            if (chain == "WIFI_CSI" && o.liveChain != "sensor") continue;
+            keys[chain + "/bearing_algorithm"] = "default";
+            keys[chain + "/bearing_calibration"] = calib.string();
+            keys[chain + "/bearing_array"] = kShare + "/arrays/rt-ac86u.yaml";
+            keys[chain + (chain == "WIFI_CSI" ? "/bearing_tx_arrays" : "/bearing_tx_array")] =
+                kShare + "/arrays/ap-linear-2.yaml";
+        }
         deriveIni(
-            kShare + "/localization/wifi-localize-emulator.ini",
-            {{"WIFI_CSI/udp_port", std::to_string(csiPort)},
-             {"ODOMETRY/udp_port", std::to_string(odoPort)},
-             {"wifi-localize/bearing_algorithm", "default"},
-             {"wifi-localize/bearing_calibration", calib.string()},
-             {"wifi-localize/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
-             {"wifi-localize/bearing_tx_array", kShare + "/arrays/ap-linear-2.yaml"},
-             {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
-              (dir / "kidnapped" / "truth" / "transmitters.yaml").string()},
-             {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aoa", "true"},
-             {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aod", "false"},
-             {"LocalizationExperiment/particles_count", std::to_string(o.particles)},
-             {"LocalizationExperiment/init_PDF_max_x", fmt(room.width, 3)},
-             {"LocalizationExperiment/init_PDF_max_y", fmt(room.depth, 3)},
-             {"KLD_options/KLD_minSampleSize", std::to_string(o.particles)},
-             {"KLD_options/KLD_maxSampleSize", std::to_string(o.particles)},
-             // the robot's top speed, as --max-speed offline (the offline [UnknownMotion])
-             {"UnknownMotion/max_speed_mps", fmt(room.speed, 3)}},
+            kShare + "/localization/wifi-localize-emulator.ini", keys,
             odo == 0 ? std::set<std::string>{} : std::set<std::string>{"ODOMETRY"}, ini);
         std::vector<std::string> emuArgs = {
             "--scenario", scenario, "--preconfigured", "155/80", "-q"};
@@ -922,7 +935,10 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
                  "Access points per room: "
               << o.accessPoints
               << ". Bearings: csi-bearings `default` with the true receiver offsets, both drives "
-                 "pooled (the random drive and the loop apart in parentheses).\n\n";
+                 "pooled (the random drive and the loop apart in parentheses); live, the same "
+                 "chain run by "
+              << (o.liveChain == "sensor" ? "the CSI sensor (its bearing_* keys)" : "wifi-localize")
+              << ".\n\n";
     std::cout << "| room | size [m] | odo scale / yaw drift | kidnapped offline odo / none [m] "
                  "| converge [s] | live odo / none [m] | worst after conv. [m] (off odo / none) "
                  "| ATE odo [m] | drift red. known / est. | device median [m] / in 95 % "
@@ -1035,6 +1051,13 @@ int main(int argc, char** argv)
                 cmd);
             TCLAP::SwitchArg argNoLive(
                 "", "no-live", "Skip the live runs (they take the drive's duration twice)", cmd);
+            std::vector<std::string> chains = {"app", "sensor"};
+            TCLAP::ValuesConstraint<std::string> chainNames(chains);
+            TCLAP::ValueArg<std::string> argLiveChain(
+                "", "live-chain",
+                "Live bearings from wifi-localize's own chain (app) or the CSI sensor's "
+                "(sensor: its bearing_* keys; wifi-localize hands it the odometry)",
+                false, "app", &chainNames, cmd);
             TCLAP::ValueArg<int> argAps(
                 "", "aps",
                 "Access points per room (the first three are the seed's whatever the count)", false,
@@ -1060,6 +1083,7 @@ int main(int argc, char** argv)
             o.laps = argLaps.getValue();
             o.particles = argParticles.getValue();
             o.live = !argNoLive.getValue();
+            o.liveChain = argLiveChain.getValue();
             o.accessPoints = argAps.getValue();
             if (o.accessPoints < 3) throw std::invalid_argument("--aps >= 3");
             if (!(o.kidnappedDuration_s >= 10)) throw std::invalid_argument("--duration >= 10 s");

@@ -82,7 +82,9 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // The live filter's reported uncertainty is judged against its error once it converged
     // (a zero or missing covariance would put nearly every error outside its ellipse).
     if (std::isfinite(number(room, "live_odo_median_m")))
+    {
         EXPECT_GE(number(room, "live_odo_inside95_after"), 0.5) << r.output;
+    }
     EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "reduction_estimated"))) << r.output;
     EXPECT_EQ(number(room, "devices"), 3) << r.output;
@@ -104,5 +106,10 @@ TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
         tmp.file("work"));
     EXPECT_NE(evalSeed.exitCode, 0);
     EXPECT_NE(evalSeed.output.find("--first-seed"), std::string::npos) << evalSeed.output;
+    const auto chain = test::run(
+        test::binDir() + "/localization-accuracy --rooms 1 --live-chain router -w " +
+        tmp.file("work"));
+    EXPECT_NE(chain.exitCode, 0);
+    EXPECT_NE(chain.output.find("--live-chain"), std::string::npos) << chain.output;
     EXPECT_FALSE(std::filesystem::exists(tmp.file("work/room-1"))) << fewAps.output;
 }
