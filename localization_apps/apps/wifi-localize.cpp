@@ -959,14 +959,17 @@ int main(int argc, char** argv)
                     << "\n";
             for (const auto& sr : sensors)
                 if (sr->bearingWorker)
+                {
+                    const auto odometryGiven = sr->bearingWorker->stats().odometry;
                     sum << "  sensor chain   : [" << sr->section << "] "
-                        << (sr->bearingWorker->stats().odometry > 0
-                                ? std::to_string(sr->bearingWorker->stats().odometry) +
+                        << (odometryGiven > 0
+                                ? std::to_string(odometryGiven) +
                                       " odometry readings given: a window holds only the frames "
                                       "taken near the newest"
                                 : std::string("no odometry: a window's frames are combined as "
                                               "if the robot stood still"))
                         << "\n";
+                }
             sum << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
                 << "  filter steps   : " << loc.steps() << "\n"
