@@ -741,15 +741,10 @@ int main(int argc, char** argv)
                 ++poseOutputs;
                 ++secPoses;
                 est.push_back(t, m);
-                const auto tumLine = [t](std::ostream& o, const mrpt::math::TPose2D& p)
-                {
-                    o << fmt(t, 6) << " " << fmt(p.x, 4) << " " << fmt(p.y, 4) << " 0 0 0 "
-                      << fmt(std::sin(p.phi / 2), 6) << " " << fmt(std::cos(p.phi / 2), 6)
-                      << std::endl;  // flushed per line
-                };
                 const auto u = loc.uncertainty();
-                tumLine(tum, m);
-                tumLine(pfTum, u.particlesMean);
+                // Flushed per line: a reader follows the estimate as it is made.
+                tum << Trajectory2D::tumLine(t, m) << std::flush;
+                pfTum << Trajectory2D::tumLine(t, u.particlesMean) << std::flush;
                 const auto& c = u.reported;
                 estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
                 covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","
@@ -949,26 +944,24 @@ int main(int argc, char** argv)
                         : std::to_string(sensorBearingLabels.size()) + " sensor(s)")
                 << " with own bearings), " << nOther << " other\n"
                 << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n";
+            // What a chain's windows combined, given the odometry or not (as in csi-bearings).
+            const auto windows = [](bool odometry)
+            {
+                return odometry ? "a window holds only the frames taken near the newest"
+                                : "a window's frames are combined as if the robot stood still";
+            };
             if (nFallback > 0)
                 sum << "  bearing chain  : "
-                    << (fallback->hasOdometry() ? "odometry given: a window holds only the frames "
-                                                  "taken near the newest, as "
-                                                  "in csi-bearings"
-                                                : "no odometry: a window's frames are combined as "
-                                                  "if the robot stood still")
-                    << "\n";
+                    << (fallback->hasOdometry() ? "odometry given: " : "no odometry: ")
+                    << windows(fallback->hasOdometry()) << "\n";
             for (const auto& sr : sensors)
                 if (sr->bearingWorker)
                 {
-                    const auto odometryGiven = sr->bearingWorker->stats().odometry;
+                    const auto given = sr->bearingWorker->stats().odometry;
                     sum << "  sensor chain   : [" << sr->section << "] "
-                        << (odometryGiven > 0
-                                ? std::to_string(odometryGiven) +
-                                      " odometry readings given: a window holds only the frames "
-                                      "taken near the newest"
-                                : std::string("no odometry: a window's frames are combined as "
-                                              "if the robot stood still"))
-                        << "\n";
+                        << (given > 0 ? std::to_string(given) + " odometry readings given: "
+                                      : std::string("no odometry: "))
+                        << windows(given > 0) << "\n";
                 }
             sum << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"

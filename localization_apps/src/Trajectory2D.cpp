@@ -121,15 +121,16 @@ void Trajectory2D::saveTum(const std::string& path, const std::string& comment) 
     std::ofstream f(path);
     if (!f) throw std::runtime_error(path + ": cannot write");
     f << "# " << (comment.empty() ? "trajectory" : comment) << ", TUM: t x y z qx qy qz qw\n";
+    for (size_t i = 0; i < size(); ++i) f << tumLine(t[i], poses[i]);
+}
+
+std::string Trajectory2D::tumLine(double time, const TPose2D& p)
+{
     char buf[256];
-    for (size_t i = 0; i < size(); ++i)
-    {
-        const auto& p = poses[i];
-        std::snprintf(
-            buf, sizeof(buf), "%.6f %.6f %.6f 0 0 0 %.9f %.9f\n", t[i], p.x, p.y,
-            std::sin(p.phi / 2), std::cos(p.phi / 2));
-        f << buf;
-    }
+    std::snprintf(
+        buf, sizeof(buf), "%.6f %.6f %.6f 0 0 0 %.9f %.9f\n", time, p.x, p.y, std::sin(p.phi / 2),
+        std::cos(p.phi / 2));
+    return buf;
 }
 
 bool Trajectory2D::interpolate(double time, TPose2D& out, double maxGap) const

@@ -429,15 +429,15 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
             {"KLD_options/KLD_maxSampleSize", std::to_string(o.particles)},
             // the robot's top speed, as --max-speed offline (the offline [UnknownMotion])
             {"UnknownMotion/max_speed_mps", fmt(room.speed, 3)}};
-        for (const std::string chain : {"wifi-localize", "WIFI_CSI"})
+        const auto configureChain = [&](const std::string& section, const std::string& txKey)
         {
-            if (chain == "WIFI_CSI" && o.liveChain != "sensor") continue;
-            keys[chain + "/bearing_algorithm"] = "default";
-            keys[chain + "/bearing_calibration"] = calib.string();
-            keys[chain + "/bearing_array"] = kShare + "/arrays/rt-ac86u.yaml";
-            keys[chain + (chain == "WIFI_CSI" ? "/bearing_tx_arrays" : "/bearing_tx_array")] =
-                kShare + "/arrays/ap-linear-2.yaml";
-        }
+            keys[section + "/bearing_algorithm"] = "default";
+            keys[section + "/bearing_calibration"] = calib.string();
+            keys[section + "/bearing_array"] = kShare + "/arrays/rt-ac86u.yaml";
+            keys[section + "/" + txKey] = kShare + "/arrays/ap-linear-2.yaml";
+        };
+        configureChain("wifi-localize", "bearing_tx_array");
+        if (o.liveChain == "sensor") configureChain("WIFI_CSI", "bearing_tx_arrays");
         deriveIni(
             kShare + "/localization/wifi-localize-emulator.ini", keys,
             odo == 0 ? std::set<std::string>{} : std::set<std::string>{"ODOMETRY"}, ini);

@@ -32,6 +32,8 @@ struct Trajectory2D
     static Trajectory2D fromFile(const std::string& path);
     /** Writes TUM (z = 0, rotation about z). */
     void saveTum(const std::string& path, const std::string& comment = {}) const;
+    /** One TUM line of saveTum() (with its newline), for writers that flush pose by pose. */
+    static std::string tumLine(double time, const mrpt::math::TPose2D& pose);
 
     /** Pose at time `time` by linear interpolation (yaw on the circle). False if `time` is
      *  outside [t.front(), t.back()] or the neighbours are more than `maxGap_s` apart. */
