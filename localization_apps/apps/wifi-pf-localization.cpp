@@ -383,7 +383,7 @@ int main(int argc, char** argv)
             recoveryOptions.loadFromConfigFile(ini, "ParticleRecovery");
             WindowSmootherOptions smootherOptions;
             smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
-            if (odo.empty()) smootherOptions.enabled = false;  // its graph needs odometry
+            smootherOptions.track.forwardOnly = motion.forwardOnly;  // without odometry
             smootherOptions.graph.useAoa = wifiMap->likelihoodOptions.use.aoa;
             smootherOptions.graph.useAod = wifiMap->likelihoodOptions.use.aod;
             if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
@@ -478,6 +478,7 @@ int main(int argc, char** argv)
             // odometry and bearings up to its own time. The filter's spread is not kept by
             // MRPT's loop: the smoother's residual test alone decides (offline).
             WindowSmoother smoother(smootherOptions, txs);
+            smoother.setArea(wifiMap->area());
             size_t refined = 0;
             if (smootherOptions.enabled)
             {

@@ -112,7 +112,9 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
     smootherOptions.graph.useAoa = wifiMap_->likelihoodOptions.use.aoa;
     smootherOptions.graph.useAod = wifiMap_->likelihoodOptions.use.aod;
+    smootherOptions.track.forwardOnly = motion_.forwardOnly;  // without odometry
     smoother_ = WindowSmoother(smootherOptions, wifiMap_->transmitters());
+    smoother_.setArea(wifiMap_->area());
 
     const std::string sect = "LocalizationExperiment";
     const int n = ini.read_int(sect, "particles_count", 0, true);
@@ -217,7 +219,7 @@ bool LiveLocalizer::step()
     if (!lastOdo_) cv_.addEstimate(t, estimate);
     recovery_->setEstimate(estimate);
     smoothed_.reset();
-    if (lastOdo_) smoothed_ = smoother_.update(t, estimate, [this] { return spread_m(); });
+    smoothed_ = smoother_.update(t, estimate, [this] { return spread_m(); });
     lastStepTime_ = t;
     ++steps_;
     bearingsUsed_ += n;

@@ -47,15 +47,23 @@ void WindowSmootherOptions::loadFromConfigFile(
     graph.bearingDecorrelation_m =
         c.read_double(s, "bearing_decorrelation_m", graph.bearingDecorrelation_m);
     graph.maxIterations = c.read_int(s, "max_iterations", graph.maxIterations);
+    withoutOdometry = c.read_bool(s, "without_odometry", withoutOdometry);
+    trackWindow_s = c.read_double(s, "track_window_s", trackWindow_s);
+    trackSwitchCost = c.read_double(s, "track_switch_cost", trackSwitchCost);
+    track.loadFromConfigFile(c, s);
     if (!(window_s > 0) || !(minWindow_s >= 0) || !(minWindow_s <= window_s) ||
         !(solvePeriod_s > 0) || !(maxMedianWhitenedResidual > 0) || !(maxFilterSpread_m > 0) ||
         !(maxRecentResidual_rad > 0) || !(graph.nodePeriod_s > 0) || !(graph.odoScaleStd >= 0) ||
-        !(graph.odoYawDriftStd_radPerM >= 0) || !(graph.minStd_rad > 0))
+        !(graph.odoYawDriftStd_radPerM >= 0) || !(graph.minStd_rad > 0) ||
+        !(trackWindow_s >= minWindow_s) || !(trackWindow_s >= 2 * track.nodePeriod_s) ||
+        !(trackSwitchCost >= 0))
         throw std::invalid_argument(
             "[" + s +
             "]: window_s, solve_period_s, max_median_whitened_residual, max_filter_spread_m, "
             "max_recent_residual_deg, "
             "node_period_s and min_std_deg must be > 0, min_window_s in [0, window_s], "
+            "track_window_s at least min_window_s and two track_node_period_s, "
+            "track_switch_cost >= 0, "
             "odometry_scale_std and odometry_yaw_drift_deg_per_m >= 0");
     if (graph.loss != "cauchy" && graph.loss != "huber" && graph.loss != "none")
         throw std::invalid_argument(
@@ -70,6 +78,11 @@ std::string WindowSmootherOptions::asString() const
       << " s, used if the median |residual|/sigma <= " << maxMedianWhitenedResidual
       << " and the last 2 s' median |AoA residual| <= " << mrpt::RAD2DEG(maxRecentResidual_rad)
       << " deg";
+    if (withoutOdometry)
+        o << "; without odometry a " << trackWindow_s << " s track, a node every "
+          << track.nodePeriod_s << " s, speed change sigma " << track.accelStd_mps2
+          << " m/s^2, turn " << mrpt::RAD2DEG(track.turnAccelStd_radps2) << " deg/s^2, sideways "
+          << track.lateralStd_m << " m per node" << (track.forwardOnly ? ", forward only" : "");
     return o.str();
 }
 
@@ -99,6 +112,8 @@ void WindowSmoother::forgetBefore(double t)
     // Keeps memory bounded also while update() is not called (no odometry yet, live).
     while (odometry_.size() > 1 && odometry_[1].first <= t) odometry_.pop_front();
     while (!bearings_.empty() && bearings_.front().t < t) bearings_.pop_front();
+    while (!filterEstimates_.empty() && filterEstimates_.front().first < t)
+        filterEstimates_.pop_front();
 }
 
 const std::pair<double, TPose2D>* WindowSmoother::odometryAt(double t) const
@@ -113,17 +128,36 @@ std::optional<TPose2D> WindowSmoother::update(
     double t, const TPose2D& filterEstimate, const std::function<double()>& filterSpread_m)
 {
     if (!opts_.enabled) return std::nullopt;
-    if (t < lastSolve_t_) solved_.reset(), lastSolve_t_ = -1e300;  // a new run
+    if (t < lastSolve_t_) solved_.reset(), track_.reset(), lastSolve_t_ = -1e300;  // a new run
+    const bool tracking = odometry_.empty() && opts_.withoutOdometry;
+    if (tracking && (filterEstimates_.empty() || t > filterEstimates_.back().first))
+    {
+        filterEstimates_.emplace_back(t, filterEstimate);
+        forgetBefore(t - std::max(opts_.window_s, opts_.trackWindow_s) - 1);
+    }
     if (t - lastSolve_t_ >= opts_.solvePeriod_s - 1e-9)
     {
         lastSolve_t_ = t;
-        if (!solve(t, filterEstimate, filterSpread_m)) solved_.reset();
+        if (tracking ? !solveTrack(t, filterEstimate, filterSpread_m)
+                     : !solve(t, filterEstimate, filterSpread_m))
+            solved_.reset(), track_.reset();
     }
-    const auto* now = odometryAt(t);
-    if (!solved_ || !now) return std::nullopt;
-    // The newest solved node continued by the odometry since.
-    const auto& [odoNode, poseNode] = *solved_;
-    return (CPose2D(poseNode) + (CPose2D(now->second) - CPose2D(odoNode))).asTPose();
+    std::optional<TPose2D> smoothed;
+    if (tracking)
+    {
+        if (track_) smoothed = continueTrack(*track_, t);
+    }
+    else if (const auto* now = odometryAt(t); solved_ && now)
+    {
+        // The newest solved node continued by the odometry since.
+        const auto& [odoNode, poseNode] = *solved_;
+        smoothed = (CPose2D(poseNode) + (CPose2D(now->second) - CPose2D(odoNode))).asTPose();
+    }
+    if (smoothed && area_ &&
+        !(smoothed->x >= area_->min.x && smoothed->x <= area_->max.x &&
+          smoothed->y >= area_->min.y && smoothed->y <= area_->max.y))
+        return std::nullopt;  // the filter's estimate, which the map keeps inside, stands
+    return smoothed;
 }
 
 double WindowSmoother::recentAoaResidual(
@@ -200,6 +234,73 @@ bool WindowSmoother::solve(
     }
     ++accepted_;
     solved_.emplace(in.odometry.poses.back(), r.poses.poses.back());
+    return true;
+}
+
+TPose2D WindowSmoother::continueTrack(const Trajectory2D& track, double t)
+{
+    const size_t n = track.size();
+    if (n < 2 || t <= track.t.back()) return track.poses.back();
+    // At most 1 s ahead: beyond that the last velocity says little.
+    const double f = std::min(t - track.t.back(), 1.0) / (track.t[n - 1] - track.t[n - 2]);
+    const TPose2D step = (CPose2D(track.poses[n - 1]) - CPose2D(track.poses[n - 2])).asTPose();
+    return (CPose2D(track.poses[n - 1]) + CPose2D(f * step.x, f * step.y, f * step.phi)).asTPose();
+}
+
+bool WindowSmoother::solveTrack(
+    double t, const TPose2D& filterEstimate, const std::function<double()>& filterSpread_m)
+{
+    TrackInput in;
+    in.t1 = t;
+    in.t0 = std::max(t - opts_.trackWindow_s, filterEstimates_.front().first);
+    if (!bearings_.empty()) in.t0 = std::max(in.t0, bearings_.front().t);
+    if (bearings_.empty() || t - in.t0 < std::max(opts_.minWindow_s, 2 * opts_.track.nodePeriod_s))
+        return false;
+    for (const auto& b : bearings_)
+        if (b.t >= in.t0 && b.t <= t) in.bearings.push_back(b);
+    in.aps = aps_;
+    in.area = area_;
+    in.firstStartMargin = track_ ? opts_.trackSwitchCost : 0.0;
+
+    // Starts: the previous track continued to now at its last velocity, which holds its place
+    // unless the filter's recent estimates (while its particles agree) fit clearly better.
+    if (track_)
+    {
+        Trajectory2D continued = *track_;
+        if (t > continued.t.back()) continued.push_back(t, continueTrack(*track_, t));
+        in.starts.push_back(std::move(continued));
+    }
+    if (filterSpread_m() <= opts_.maxFilterSpread_m)
+    {
+        Trajectory2D filterTrack;
+        for (const auto& [te, p] : filterEstimates_)
+            if (te >= in.t0 - 1) filterTrack.push_back(te, p);
+        filterTrack.poses.back() = filterEstimate;
+        in.starts.push_back(std::move(filterTrack));
+    }
+    if (in.starts.empty()) return false;
+    mrpt::system::CTicTac timer;
+    TrackResult r;
+    try
+    {
+        r = solveBearingTrack(in, opts_.track, opts_.graph, kRecent_s);
+    }
+    catch (const std::runtime_error&)
+    {
+        return false;  // too little in the window: the filter's estimate stands
+    }
+    ++solves_;
+    solveTime_s_ += timer.Tac();
+    if (!(r.medianWhitenedResidual <= opts_.maxMedianWhitenedResidual)) return false;
+    // As with odometry: the newest pose must explain the newest bearings, else start over.
+    if (!(r.recentAoaResidual_rad <= opts_.maxRecentResidual_rad))
+    {
+        ++restarts_;
+        forgetBefore(t);
+        return false;
+    }
+    ++accepted_;
+    track_ = std::move(r.poses);
     return true;
 }
 

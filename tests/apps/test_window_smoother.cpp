@@ -1,10 +1,13 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/math/TBoundingBox.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt_wifi/localization/WindowSmoother.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "SyntheticWorld.h"
 
@@ -144,7 +147,7 @@ TEST(WindowSmoother, NothingBeforeMinWindowAndWhenDisabled)
             return truth;
         });
     EXPECT_GT(early.accepted(), 0u);
-    // Without odometry (live, before the first reading) update() is never called: the
+    // Bearings alone, update() never called (e.g. a live chain before its filter steps): the
     // bearings kept stay within the window, however long the robot drives.
     WindowSmoother noOdometry(WindowSmootherOptions(), w.aps);
     size_t perSecond = 0;
@@ -168,7 +171,9 @@ TEST(WindowSmoother, ConfigErrorsNameTheKey)
 {
     for (const std::string bad :
          {"window_s = 0", "min_window_s = 30", "solve_period_s = -1", "loss = tukey",
-          "max_median_whitened_residual = 0"})
+          "max_median_whitened_residual = 0", "track_window_s = 1", "track_node_period_s = 0",
+          "track_accel_std = -1", "track_turn_accel_std_deg = 0", "track_lateral_std_m = 0",
+          "track_switch_cost = -1"})
     {
         mrpt::config::CConfigFileMemory ini("[WindowSmoother]\n" + bad + "\n");
         WindowSmootherOptions o;
@@ -189,4 +194,118 @@ TEST(WindowSmoother, ConfigErrorsNameTheKey)
     EXPECT_FALSE(o.enabled);
     EXPECT_DOUBLE_EQ(o.window_s, 12);
     EXPECT_EQ(o.asString(), "off");
+}
+
+namespace
+{
+/** The drive of driftingDrive() without its odometry: multipath of 2 deg, AoA at 10 Hz per AP. */
+double nodeError(const Trajectory2D& track, const Trajectory2D& truth, size_t k)
+{
+    mrpt::math::TPose2D p;
+    if (!truth.interpolate(track.t[k], p)) return INFINITY;
+    return std::hypot(track.poses[k].x - p.x, track.poses[k].y - p.y);
+}
+}  // namespace
+
+TEST(BearingTrack, FollowsARobotWithoutOdometryFromALaggingStart)
+{
+    const auto w = driftingDrive();
+    const double t1 = w.truth.t.front() + 30, t0 = t1 - 20;
+    // The start: a filter 0.5 m behind the robot, 10 deg off its heading.
+    const mrpt::poses::CPose2D lag(-0.5, 0.2, 10 * M_PI / 180);
+    TrackInput in;
+    in.t0 = t0, in.t1 = t1, in.aps = w.aps, in.bearings = w.bearings;
+    Trajectory2D start;
+    for (size_t i = 0; i < w.truth.size(); i += 10)
+        start.push_back(w.truth.t[i], (mrpt::poses::CPose2D(w.truth.poses[i]) + lag).asTPose());
+    in.starts = {start};
+    TrackMotionPrior prior;
+    prior.forwardOnly = true;
+    GraphSlamOptions g = WindowSmootherOptions::defaultGraph();
+    g.useAod = false;
+    const auto r = solveBearingTrack(in, prior, g);
+    ASSERT_EQ(r.poses.size(), 41u);  // every 0.5 s over 20 s, both ends
+    EXPECT_DOUBLE_EQ(r.poses.t.back(), t1);
+    std::vector<double> errors, headingErrors;
+    for (size_t k = 0; k < r.poses.size(); ++k)
+    {
+        errors.push_back(nodeError(r.poses, w.truth, k));
+        mrpt::math::TPose2D p;
+        w.truth.interpolate(r.poses.t[k], p);
+        headingErrors.push_back(std::abs(mrpt::math::wrapToPi(r.poses.poses[k].phi - p.phi)));
+    }
+    // Bearings alone place the track (the start was 0.5 m off), and moving along its heading
+    // gives the heading (the corners, where the loop turns on the spot, excepted).
+    EXPECT_LT(median(errors), 0.15);
+    // The newest node, the estimate, has only the bearings of the last step on one side: it is
+    // the least certain (0.33 m here), still closer than the start (0.54 m).
+    EXPECT_LT(errors.back(), 0.4);
+    EXPECT_LT(median(headingErrors), 5 * M_PI / 180);
+    EXPECT_LT(r.medianWhitenedResidual, 1.0);
+    EXPECT_EQ(r.start, 0u);
+
+    // A second start far off that fits worse loses; by less than the margin it would not
+    // replace the first start, and an area holds the nodes inside it.
+    Trajectory2D far;
+    for (size_t i = 0; i < start.size(); ++i)
+        far.push_back(start.t[i], mrpt::math::TPose2D(1, 1, 0));
+    in.starts = {far, start};
+    in.firstStartMargin = 0;
+    EXPECT_EQ(solveBearingTrack(in, prior, g).start, 1u);
+    in.area = mrpt::math::TBoundingBox({0, 0, 0}, {10, 3, 0});  // the loop reaches y = 6
+    const auto bounded = solveBearingTrack(in, prior, g);
+    for (const auto& p : bounded.poses.poses) EXPECT_LT(p.y, 3.2);
+}
+
+TEST(BearingTrack, RefusesWhatItCannotSolve)
+{
+    const auto w = driftingDrive();
+    TrackInput in;
+    in.aps = w.aps, in.bearings = w.bearings;
+    in.t0 = w.truth.t.front() + 10, in.t1 = in.t0 + 10;
+    GraphSlamOptions g;
+    EXPECT_THROW(solveBearingTrack(in, TrackMotionPrior(), g), std::runtime_error);  // no start
+    in.starts = {w.truth};
+    in.t1 = in.t0 + 0.1;  // shorter than a node step
+    EXPECT_THROW(solveBearingTrack(in, TrackMotionPrior(), g), std::runtime_error);
+    in.t1 = in.t0 + 10;
+    in.aps = TransmitterMap();  // none of the bearings' transmitters
+    EXPECT_THROW(solveBearingTrack(in, TrackMotionPrior(), g), std::runtime_error);
+}
+
+TEST(WindowSmoother, WithoutOdometryFitsATrackToTheBearings)
+{
+    const auto w = driftingDrive();
+    const Trajectory2D none;
+    // A filter without odometry: 0.4 m behind the robot and 8 deg off.
+    const mrpt::poses::CPose2D lag(-0.4, 0.15, 8 * M_PI / 180);
+    const auto filterAt = [&](double, const mrpt::math::TPose2D& truth)
+    { return (mrpt::poses::CPose2D(truth) + lag).asTPose(); };
+    WindowSmoother smoother(WindowSmootherOptions(), w.aps);
+    const auto r = replay(w, none, smoother, filterAt);
+    EXPECT_GT(r.smoothedErrors.size(), r.estimates * 8 / 10);
+    EXPECT_GT(smoother.accepted(), 80u);
+    EXPECT_LT(median(r.smoothedErrors), 0.2);
+    EXPECT_LT(median(r.smoothedErrors), 0.5 * median(r.filterErrors));
+
+    // Switched off: the filter's estimate stands.
+    WindowSmootherOptions off;
+    off.withoutOdometry = false;
+    WindowSmoother filterOnly(off, w.aps);
+    EXPECT_TRUE(replay(w, none, filterOnly, filterAt).smoothedErrors.empty());
+
+    // An area that leaves out part of the drive: no smoothed estimate lies outside it.
+    WindowSmoother bounded(WindowSmootherOptions(), w.aps);
+    bounded.setArea(mrpt::math::TBoundingBox({0, 0, 0}, {10, 4, 0}));
+    size_t outside = 0, inside = 0;
+    for (const auto& b : w.bearings)
+    {
+        bounded.addBearing(b);
+        mrpt::math::TPose2D truth;
+        if (!w.truth.interpolate(b.t, truth)) continue;
+        if (const auto s = bounded.update(b.t, filterAt(b.t, truth), [] { return 0.3; }))
+            (s->y > 4 ? outside : inside)++;
+    }
+    EXPECT_EQ(outside, 0u);
+    EXPECT_GT(inside, 0u);
 }

@@ -5,6 +5,7 @@
 #include <mrpt/math/TPose2D.h>
 #include <mrpt_wifi/localization/BearingGraphSlam.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
+#include <mrpt_wifi/localization/BearingTrack.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
 #include <cmath>
@@ -43,6 +44,17 @@ struct WindowSmootherOptions
      *  max_iterations). Which angles it uses (useAoa, useAod) the apps set from the map's
      *  likelihood options, so the smoother trusts what the filter trusts. */
     GraphSlamOptions graph = defaultGraph();
+    /** `without_odometry`: while no odometry has arrived, each solve fits a track to the
+     *  bearings of the last `track_window_s` with `track` as the motion prior
+     *  (solveBearingTrack), started from the filter's recent estimates and from the previous
+     *  solve continued; the same tests decide whether it is used. false: nothing without
+     *  odometry (the filter's estimate stands). */
+    bool withoutOdometry = true;
+    double trackWindow_s = 20;  //!< `track_window_s`
+    /** `track_switch_cost`: the previous track continued stays the estimate unless the
+     *  filter's start ends with a cost lower by more than this (TrackInput::firstStartMargin). */
+    double trackSwitchCost = 3;
+    TrackMotionPrior track;  //!< `track_*` keys (TrackMotionPrior::loadFromConfigFile)
 
     static GraphSlamOptions defaultGraph();
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
@@ -65,13 +77,22 @@ struct WindowSmootherOptions
  *  The particle filter stays in charge of where the robot is (kidnapping, recovery): the
  *  smoother only refines it, and a solve that does not fit the bearings, or whose newest pose
  *  does not explain the newest bearings (a kidnapping inside the window: then it starts
- *  over), gives nothing. Not thread-safe. */
+ *  over), gives nothing.
+ *
+ *  Without odometry (none added, options.withoutOdometry) the window is a track fitted to the
+ *  bearings with a motion prior instead (solveBearingTrack), started from the filter's
+ *  estimates given to update() and from the previous track continued at its last velocity;
+ *  between solves the newest node continued at that velocity is the estimate. Not
+ *  thread-safe. */
 class WindowSmoother
 {
 public:
     WindowSmoother(const WindowSmootherOptions& options, const TransmitterMap& aps);
 
     const WindowSmootherOptions& options() const { return opts_; }
+    /** The area the robot can be in (the map's): a smoothed pose outside it is not used, and a
+     *  track is held inside it. */
+    void setArea(const std::optional<mrpt::math::TBoundingBox>& area) { area_ = area; }
 
     /** Odometry readings in time order (older or equal times are dropped). Both add* keep only
      *  the last window_s (+ 1 s) of data; nothing while disabled. */
@@ -103,18 +124,29 @@ private:
     double recentAoaResidual(
         const Trajectory2D& poses, const std::vector<BearingRecord>& bearings) const;
     static constexpr double kRecent_s = 2.0;
-    /** Drops the bearings before t and the odometry readings before the last one at or
-     *  before t. */
+    /** Without odometry: solveBearingTrack on the last track_window_s. */
+    bool solveTrack(
+        double t, const mrpt::math::TPose2D& filterEstimate,
+        const std::function<double()>& filterSpread_m);
+    /** The newest node of `track` continued to `t` at the velocity of its last step. */
+    static mrpt::math::TPose2D continueTrack(const Trajectory2D& track, double t);
+    /** Drops the bearings and filter estimates before t and the odometry readings before the
+     *  last one at or before t. */
     void forgetBefore(double t);
     /** The newest odometry reading at or before t. */
     const std::pair<double, mrpt::math::TPose2D>* odometryAt(double t) const;
 
     WindowSmootherOptions opts_;
     TransmitterMap aps_;
+    std::optional<mrpt::math::TBoundingBox> area_;
     std::deque<std::pair<double, mrpt::math::TPose2D>> odometry_;
     std::deque<BearingRecord> bearings_;
     /** The last accepted solve: the newest node's odometry reading and its solved pose. */
     std::optional<std::pair<mrpt::math::TPose2D, mrpt::math::TPose2D>> solved_;
+    /** Without odometry: the filter's estimates given to update(), and the last accepted
+     *  track. */
+    std::deque<std::pair<double, mrpt::math::TPose2D>> filterEstimates_;
+    std::optional<Trajectory2D> track_;
     double lastSolve_t_ = -1e300;
     size_t solves_ = 0, accepted_ = 0, restarts_ = 0;
     double solveTime_s_ = 0;
