@@ -2,17 +2,21 @@
 // Benchmarks of the localization targets (issue 7):
 //  - particle filter: >= 100 updates/s with 5,000 particles (MRPT's CParticleFilter with the
 //    WiFi bearing map; one update = prediction + weighting + resampling for one sensory frame);
-//  - graph SLAM: 10,000 poses + 50,000 bearing edges solved in <= 5 s.
+//  - graph SLAM: 10,000 poses + 50,000 bearing edges solved in <= 5 s;
+//  - the window smoother without odometry: a track solve well inside its 0.5 s period.
 #include <benchmark/benchmark.h>
 #include <mrpt/bayes/CParticleFilter.h>
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose2D.h>
 #include <mrpt/slam/CMonteCarloLocalization2D.h>
 #include <mrpt_wifi/localization/BearingGraphSlam.h>
+#include <mrpt_wifi/localization/BearingTrack.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
+#include <mrpt_wifi/localization/WindowSmoother.h>
 
 #include "SyntheticWorld.h"
 
@@ -107,5 +111,50 @@ static void BM_GraphSlam10kPoses50kEdges(benchmark::State& state)
     state.counters["ate_median_m"] = absoluteTrajectoryError(r.poses, w.truth).stats.median;
 }
 BENCHMARK(BM_GraphSlam10kPoses50kEdges)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+// One solve of the window smoother without odometry: a 20 s track (41 nodes) fitted to the
+// AoA of 4 APs at range(0) bearings per second each, from a start 0.5 m behind the robot. Live,
+// wifi-localize makes one every 0.5 s in its filter thread.
+static void BM_TrackSolveWithoutOdometry20s(benchmark::State& state)
+{
+    WorldOptions wo;
+    wo.duration_s = 40;
+    wo.rate_Hz = double(state.range(0));
+    wo.aod = false;
+    wo.multipathAmplitude = 2 * M_PI / 180;
+    const auto w = makeWorld(kidnappedAps(), wo);
+    TrackInput in;
+    in.t1 = w.truth.t.front() + 30, in.t0 = in.t1 - 20;
+    in.aps = kidnappedAps(), in.bearings = w.bearings;
+    Trajectory2D start;
+    for (size_t i = 0; i < w.truth.size(); i += 10)
+        start.push_back(
+            w.truth.t[i],
+            (mrpt::poses::CPose2D(w.truth.poses[i]) + mrpt::poses::CPose2D(-0.5, 0.2, 0.17))
+                .asTPose());
+    in.starts = {start};
+    TrackMotionPrior prior;
+    prior.forwardOnly = true;
+    auto g = WindowSmootherOptions::defaultGraph();
+    g.useAod = false;
+    TrackResult r;
+    for (auto _ : state) r = solveBearingTrack(in, prior, g);
+    std::vector<double> errors;
+    for (size_t k = 0; k < r.poses.size(); ++k)
+    {
+        mrpt::math::TPose2D truth;
+        w.truth.interpolate(r.poses.t[k], truth);
+        errors.push_back(std::hypot(r.poses.poses[k].x - truth.x, r.poses.poses[k].y - truth.y));
+    }
+    state.counters["bearing_edges"] = double(r.bearingEdges);
+    state.counters["newest_node_error_m"] = errors.back();
+    std::nth_element(errors.begin(), errors.begin() + long(errors.size() / 2), errors.end());
+    state.counters["median_node_error_m"] = errors[errors.size() / 2];
+}
+BENCHMARK(BM_TrackSolveWithoutOdometry20s)
+    ->Arg(10)
+    ->Arg(30)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK_MAIN();
