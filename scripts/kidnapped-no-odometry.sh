@@ -6,9 +6,10 @@
 # Per seed: wifi-sim -d 60; receiver AoA from csi-bearings (default estimator, the simulator's
 # true receiver offsets: bearing-accuracy --truth-calibration); wifi-pf-localization with the
 # drive's odometry and without (--max-speed 0.6, the shipped [UnknownMotion] and
-# [ParticleRecovery]), 3000 particles, errors of the PF mean against the true poses. Prints one
-# line per seed and run (median error after convergence, worst error, estimates outside the
-# room, recovery episodes), then the ratio without/with odometry per seed.
+# [ParticleRecovery]), 3000 particles, errors of the estimate (PF mean refined by the window
+# smoother) against the true poses. Prints one line per seed and run (median error after
+# convergence, worst error, estimates outside the room, recovery episodes), then the ratio
+# without/with odometry per seed.
 set -euo pipefail
 build=$(realpath "$1"); work=$2; shift 2
 src=$(cd "$(dirname "$0")/.." && pwd)

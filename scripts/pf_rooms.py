@@ -7,7 +7,8 @@
 SWEEP_WORK is a `localization-accuracy -w DIR` folder (its room-N/pf.ini and the recorded
 kidnapped/ bearings, odometry and true poses). Each room and filter seed runs
 wifi-pf-localization offline, 3000 particles, with the room's pf.ini changed as given; the
-figure is the sweep's: median error of the PF mean against the true poses after convergence
+figure is the sweep's: median error of the estimate (estimate_tum.txt: the PF mean refined by the
+window smoother) against the true poses after convergence
 (error < 1 m for 5 s; never: infinite). Prints each room's runs and median, then the runs within
 0.3 m, the runs that never converged and the rooms whose median is within 0.3 m.
 

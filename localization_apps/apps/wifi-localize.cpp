@@ -635,8 +635,8 @@ int main(int argc, char** argv)
             if (!mrpt::system::directoryExists(outDir))
                 throw std::runtime_error("cannot create " + outDir);
             std::ofstream tum(outDir + "/estimate_tum.txt");
-            tum << "# wifi-localize estimate (PF mean, with odometry refined by the window "
-                   "smoother): t x y z qx qy qz qw\n"
+            tum << "# wifi-localize estimate (PF mean refined by the window smoother, with "
+                   "odometry or without): t x y z qx qy qz qw\n"
                 << std::flush;
             // The filter's own mean as well, as wifi-pf-localization keeps it.
             std::ofstream pfTum(outDir + "/pf_estimate_tum.txt");

@@ -826,7 +826,7 @@ void drawRoom(const Room& r, const fs::path& dir)
     std::string err;
     {
         plot::Figure f;
-        f.title = "room " + std::to_string(r.seed) + ": kidnapped robot (PF mean vs truth)";
+        f.title = "room " + std::to_string(r.seed) + ": kidnapped robot (estimates vs truth)";
         f.xlabel = "x [m]", f.ylabel = "y [m]", f.equalAxes = true;
         f.series = {walls, series(r.kidnappedTruth, "truth", "lines lw 2 lc rgb '#333333'")};
         const char* colours[2][2] = {{"#d62728", "#ff7f0e"}, {"#2ca02c", "#9467bd"}};
@@ -925,8 +925,8 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
               << "–" << rooms.back().seed << ")\n\n"
               << "Kidnapped: a " << fmt(o.kidnappedDuration_s, 0) << " s random drive, "
               << o.particles
-              << " particles, errors of the estimate (PF mean; with odometry refined by the window "
-                 "smoother) against the true poses "
+              << " particles, errors of the estimate (PF mean refined by the window smoother, with "
+                 "odometry or without) against the true poses "
               << "(converged: error < " << fmt(o.convergedThreshold_m, 1) << " m for "
               << fmt(o.convergedHold_s, 0)
               << " s; worst = maximum after convergence). Drift and devices: " << o.laps
