@@ -379,27 +379,15 @@ GraphSlamResult solveOnce(
                 " has no odometry path to node 0)");
 
     auto sigma = [&](double s) { return std::max(opt.minStd_rad, opt.stdScale * s); };
-    // Bearings taken close together share their multipath error: per transmitter, n bearings
-    // from c distinct cells carry about c independent ones, so each σ grows by sqrt(n / c).
-    std::map<MacAddress, double> decorrelation;
-    if (opt.bearingDecorrelation_m > 0)
+    // Bearings taken close together share their multipath error.
+    BearingDecorrelation decorrelation(opt.bearingDecorrelation_m);
+    for (const auto& a : att)
     {
-        std::map<MacAddress, std::set<std::pair<long, long>>> cells;
-        std::map<MacAddress, size_t> count;
-        for (const auto& a : att)
-        {
-            const auto s = compose(TPose2D(X[a.node][0], X[a.node][1], X[a.node][2]), a.offset);
-            cells[a.b->transmitter].insert(decorrelationCell(s.x, s.y, opt.bearingDecorrelation_m));
-            count[a.b->transmitter]++;
-        }
-        for (const auto& [mac, c] : cells)
-            decorrelation[mac] = std::sqrt(double(count[mac]) / double(c.size()));
+        const auto s = compose(TPose2D(X[a.node][0], X[a.node][1], X[a.node][2]), a.offset);
+        decorrelation.add(a.b->transmitter, s.x, s.y);
     }
     const auto decorrelated = [&](const BearingRecord& b, double s)
-    {
-        const auto it = decorrelation.find(b.transmitter);
-        return sigma(s) * (it == decorrelation.end() ? 1.0 : it->second);
-    };
+    { return sigma(s) * decorrelation.factor(b.transmitter); };
     std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     std::vector<std::pair<ceres::ResidualBlockId, double>> bearingBlocks;  // with σ
     for (const auto& a : att)

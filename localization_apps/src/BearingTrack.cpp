@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <limits>
-#include <map>
-#include <set>
 #include <stdexcept>
 
 #include "BearingResiduals.h"
@@ -146,8 +144,7 @@ double median(std::vector<double> v)
 }  // namespace
 
 TrackResult solveBearingTrack(
-    const TrackInput& in, const TrackMotionPrior& prior, const GraphSlamOptions& opt,
-    double recent_s)
+    const TrackInput& in, const TrackMotionPrior& prior, const GraphSlamOptions& opt)
 {
     const double h = prior.nodePeriod_s;
     if (!(in.t1 >= in.t0 + h))
@@ -185,22 +182,13 @@ TrackResult solveBearingTrack(
     const auto sigmaOf = [&](const Use& u)
     { return std::max(opt.minStd_rad, opt.stdScale * (u.departure ? u.b->aodStd : u.b->aoaStd)); };
 
-    // Bearings taken close together share their multipath error (as in the graph): per
-    // transmitter, n bearings from c cells count as c. The cells are those of the first start's
-    // track, the same σ for every start: the starts' costs are compared.
-    std::map<MacAddress, double> inflation;
-    if (opt.bearingDecorrelation_m > 0)
+    // Bearings taken close together share their multipath error (as in the graph), counted on
+    // the first start's track: the same σ for every start, whose costs are compared.
+    BearingDecorrelation decorrelation(opt.bearingDecorrelation_m);
+    for (const auto& u : uses)
     {
-        std::map<MacAddress, std::set<std::pair<long, long>>> cells;
-        std::map<MacAddress, size_t> count;
-        for (const auto& u : uses)
-        {
-            const auto p = poseAt(in.starts.front(), u.b->t);
-            cells[u.b->transmitter].insert(decorrelationCell(p.x, p.y, opt.bearingDecorrelation_m));
-            count[u.b->transmitter]++;
-        }
-        for (const auto& [mac, c] : cells)
-            inflation[mac] = std::sqrt(double(count[mac]) / double(c.size()));
+        const auto p = poseAt(in.starts.front(), u.b->t);
+        decorrelation.add(u.b->transmitter, p.x, p.y);
     }
 
     TrackResult best;
@@ -218,11 +206,9 @@ TrackResult solveBearingTrack(
         po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
         ceres::Problem problem(po);
         std::vector<ceres::ResidualBlockId> bearingBlocks;
-        std::vector<double> sigmas;
         for (const auto& u : uses)
         {
-            const auto it = inflation.find(u.b->transmitter);
-            const double sigma = sigmaOf(u) * (it == inflation.end() ? 1.0 : it->second);
+            const double sigma = sigmaOf(u) * decorrelation.factor(u.b->transmitter);
             const auto& s = u.b->sensorPose;
             auto* r = new InterpolatedBearingResidual{
                 u.alpha,
@@ -240,7 +226,6 @@ TrackResult solveBearingTrack(
             bearingBlocks.push_back(problem.AddResidualBlock(
                 new ceres::AutoDiffCostFunction<InterpolatedBearingResidual, 1, 3, 3>(r),
                 detail::makeLoss(opt.loss, opt.lossScale), X[u.k].data(), X[u.k + 1].data()));
-            sigmas.push_back(sigma);
         }
         if (in.area)
             for (auto& x : X)
@@ -273,23 +258,18 @@ TrackResult solveBearingTrack(
 
         TrackResult r;
         r.finalCost = sum.final_cost;
-        r.converged = sum.termination_type == ceres::CONVERGENCE;
         r.bearingEdges = uses.size();
         r.start = si;
         for (size_t k = 0; k < N; ++k)
             r.poses.push_back(times[k], TPose2D(X[k][0], X[k][1], wrapToPi(X[k][2])));
-        std::vector<double> whitened, recent;
-        for (size_t i = 0; i < uses.size(); ++i)
+        std::vector<double> whitened;
+        for (const auto id : bearingBlocks)
         {
             double cost = 0, res = 0;
-            if (!problem.EvaluateResidualBlock(bearingBlocks[i], false, &cost, &res, nullptr))
-                continue;
-            whitened.push_back(std::abs(res));
-            if (!uses[i].departure && uses[i].b->t >= in.t1 - recent_s)
-                recent.push_back(std::abs(res) * sigmas[i]);
+            if (problem.EvaluateResidualBlock(id, false, &cost, &res, nullptr))
+                whitened.push_back(std::abs(res));
         }
         r.medianWhitenedResidual = median(whitened);
-        r.recentAoaResidual_rad = median(recent);
         best = std::move(r);
     }
     if (best.poses.size() == 0)

@@ -89,6 +89,22 @@ std::pair<long, long> decorrelationCell(double x, double y, double size)
     return {long(std::floor(x / size)), long(std::floor(y / size))};
 }
 
+void BearingDecorrelation::add(const MacAddress& transmitter, double x, double y)
+{
+    if (!(cell_m_ > 0)) return;
+    auto& [count, cells] = seen_[transmitter];
+    ++count;
+    cells.insert(decorrelationCell(x, y, cell_m_));
+}
+
+double BearingDecorrelation::factor(const MacAddress& transmitter) const
+{
+    const auto it = seen_.find(transmitter);
+    if (it == seen_.end()) return 1.0;
+    const auto& [count, cells] = it->second;
+    return std::sqrt(double(count) / double(cells.size()));
+}
+
 DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const DeviceMapOptions& o)
 {
     DeviceEstimate d;

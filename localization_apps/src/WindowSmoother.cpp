@@ -4,6 +4,7 @@
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/CTicTac.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/localization/WindowSmoother.h>
 
 #include <algorithm>
@@ -153,9 +154,7 @@ std::optional<TPose2D> WindowSmoother::update(
         const auto& [odoNode, poseNode] = *solved_;
         smoothed = (CPose2D(poseNode) + (CPose2D(now->second) - CPose2D(odoNode))).asTPose();
     }
-    if (smoothed && area_ &&
-        !(smoothed->x >= area_->min.x && smoothed->x <= area_->max.x &&
-          smoothed->y >= area_->min.y && smoothed->y <= area_->max.y))
+    if (smoothed && !CWiFiBearingMap::inArea(area_, smoothed->x, smoothed->y))
         return std::nullopt;  // the filter's estimate, which the map keeps inside, stands
     return smoothed;
 }
@@ -283,7 +282,7 @@ bool WindowSmoother::solveTrack(
     TrackResult r;
     try
     {
-        r = solveBearingTrack(in, opts_.track, opts_.graph, kRecent_s);
+        r = solveBearingTrack(in, opts_.track, opts_.graph);
     }
     catch (const std::runtime_error&)
     {
@@ -293,7 +292,7 @@ bool WindowSmoother::solveTrack(
     solveTime_s_ += timer.Tac();
     if (!(r.medianWhitenedResidual <= opts_.maxMedianWhitenedResidual)) return false;
     // As with odometry: the newest pose must explain the newest bearings, else start over.
-    if (!(r.recentAoaResidual_rad <= opts_.maxRecentResidual_rad))
+    if (!(recentAoaResidual(r.poses, in.bearings) <= opts_.maxRecentResidual_rad))
     {
         ++restarts_;
         forgetBefore(t);

@@ -63,11 +63,8 @@ struct TrackResult
     Trajectory2D poses;  //!< at the node times, oldest first
     size_t bearingEdges = 0;
     double finalCost = 0;
-    /** The bearings' median |residual|/σ and the median |AoA residual| [rad] of those of the
-     *  last `recent_s` seconds (0 if none), at the solution. */
-    double medianWhitenedResidual = 0, recentAoaResidual_rad = 0;
-    bool converged = false;
-    size_t start = 0;  //!< index of the winning start
+    double medianWhitenedResidual = 0;  //!< the bearings' median |residual|/σ at the solution
+    size_t start = 0;                   //!< index of the winning start
 };
 
 /** A robot's path over [t0, t1] from bearings to known transmitters and a motion prior alone
@@ -83,7 +80,6 @@ struct TrackResult
  *  Throws std::runtime_error on t1 < t0 + nodePeriod_s, no start, no usable bearing or no
  *  usable solution. */
 TrackResult solveBearingTrack(
-    const TrackInput& in, const TrackMotionPrior& prior, const GraphSlamOptions& bearings,
-    double recent_s = 2.0);
+    const TrackInput& in, const TrackMotionPrior& prior, const GraphSlamOptions& bearings);
 
 }  // namespace mrpt_wifi::localization

@@ -82,10 +82,12 @@ public:
     /** The area the robot can be in (x and y of the box; z unused), or none (unbounded). */
     void setArea(const std::optional<mrpt::math::TBoundingBox>& area) { area_ = area; }
     const std::optional<mrpt::math::TBoundingBox>& area() const { return area_; }
-    bool inArea(double x, double y) const
+    bool inArea(double x, double y) const { return inArea(area_, x, y); }
+    /** (x, y) inside `area` (x and y of the box), or no area. */
+    static bool inArea(const std::optional<mrpt::math::TBoundingBox>& area, double x, double y)
     {
-        return !area_ ||
-               (x >= area_->min.x && x <= area_->max.x && y >= area_->min.y && y <= area_->max.y);
+        return !area ||
+               (x >= area->min.x && x <= area->max.x && y >= area->min.y && y <= area->max.y);
     }
     /** Log-likelihood of one bearing seen from a pose outside the area: e^-30, far below any
      *  bearing's own (the robust model's outlier floor is ≈ log(0.1/2π) = −4.1). */

@@ -7,6 +7,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 
 #include <map>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -69,6 +70,23 @@ double mahalanobis2(double xx, double xy, double yy, double ex, double ey);
 /** The square cell of side `size` [m] that (x, y) falls in: bearings received in one cell share
  *  their multipath error (DeviceMapOptions::decorrelation_m, GraphSlamOptions). */
 std::pair<long, long> decorrelationCell(double x, double y, double size);
+
+/** Per transmitter, bearings received close together share their multipath error: n bearings
+ *  from c distinct cells (decorrelationCell) carry about c independent ones, so each σ grows by
+ *  sqrt(n / c). With a cell size <= 0 every bearing counts (factor 1). */
+class BearingDecorrelation
+{
+public:
+    explicit BearingDecorrelation(double cell_m) : cell_m_(cell_m) {}
+    /** A bearing of `transmitter` received at (x, y). */
+    void add(const MacAddress& transmitter, double x, double y);
+    /** sqrt(n / c) of `transmitter`; 1 for one never added. */
+    double factor(const MacAddress& transmitter) const;
+
+private:
+    double cell_m_;
+    std::map<MacAddress, std::pair<size_t, std::set<std::pair<long, long>>>> seen_;
+};
 
 struct DeviceEstimate
 {
