@@ -3,6 +3,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -185,27 +186,36 @@ ErrorStats computeStats(std::vector<double> e)
     return s;
 }
 
+namespace
+{
+/** Umeyama's least-squares similarity b ≈ s·R·a + t (Eigen's), scale fixed at 1 unless asked. */
+Similarity2D umeyama2D(const std::vector<TPoint2D>& a, const std::vector<TPoint2D>& b, bool scale)
+{
+    if (a.size() != b.size() || a.size() < 2)
+        throw std::invalid_argument("alignRigid2D / alignSimilarity2D: bad input");
+    Eigen::Matrix2Xd A(2, a.size()), B(2, b.size());
+    for (size_t i = 0; i < a.size(); ++i)
+        A.col(Eigen::Index(i)) << a[i].x, a[i].y, B.col(Eigen::Index(i)) << b[i].x, b[i].y;
+    const Eigen::Matrix3d T = Eigen::umeyama(A, B, scale);
+    Similarity2D r;
+    r.scale = scale ? T.block<2, 2>(0, 0).col(0).norm() : 1.0;
+    r.pose = TPose2D(T(0, 2), T(1, 2), std::atan2(T(1, 0), T(0, 0)));
+    return r;
+}
+}  // namespace
+
 TPose2D alignRigid2D(const std::vector<TPoint2D>& a, const std::vector<TPoint2D>& b)
 {
-    if (a.size() != b.size() || a.empty()) throw std::invalid_argument("alignRigid2D: bad input");
-    TPoint2D ca(0, 0), cb(0, 0);
-    for (size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-    ca *= 1.0 / a.size();
-    cb *= 1.0 / b.size();
-    // Optimal rotation in 2-D: angle of Σ (a'_i, b'_i) cross/dot sums.
-    double sdot = 0, scross = 0;
-    for (size_t i = 0; i < a.size(); ++i)
-    {
-        const TPoint2D pa = a[i] - ca, pb = b[i] - cb;
-        sdot += pa.x * pb.x + pa.y * pb.y;
-        scross += pa.x * pb.y - pa.y * pb.x;
-    }
-    const double th = std::atan2(scross, sdot);
-    const double c = std::cos(th), s = std::sin(th);
-    return TPose2D(cb.x - (c * ca.x - s * ca.y), cb.y - (s * ca.x + c * ca.y), th);
+    return umeyama2D(a, b, false).pose;
 }
 
-AteResult absoluteTrajectoryError(const Trajectory2D& est, const Trajectory2D& truth, bool align)
+Similarity2D alignSimilarity2D(const std::vector<TPoint2D>& a, const std::vector<TPoint2D>& b)
+{
+    return umeyama2D(a, b, true);
+}
+
+AteResult absoluteTrajectoryError(
+    const Trajectory2D& est, const Trajectory2D& truth, bool align, bool correctScale)
 {
     AteResult r;
     std::vector<TPoint2D> a, b;
@@ -225,11 +235,16 @@ AteResult absoluteTrajectoryError(const Trajectory2D& est, const Trajectory2D& t
         throw std::runtime_error(
             "ATE: the estimate and the ground truth don't overlap in time (" +
             std::to_string(a.size()) + " poses matched)");
-    r.alignment = align ? alignRigid2D(a, b) : TPose2D(0, 0, 0);
+    if (align)
+    {
+        const auto sim = umeyama2D(a, b, correctScale);
+        r.alignment = sim.pose;
+        r.scale = sim.scale;
+    }
     const mrpt::poses::CPose2D T(r.alignment);
     for (size_t i = 0; i < a.size(); ++i)
     {
-        const auto p = T.composePoint(a[i]);
+        const auto p = T.composePoint(a[i] * r.scale);
         r.errors.push_back(std::hypot(p.x - b[i].x, p.y - b[i].y));
     }
     r.stats = computeStats(r.errors);

@@ -87,10 +87,14 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     }
     EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "reduction_estimated"))) << r.output;
+    // With the unobservable scale taken out, the bearings' correction of estimated APs shows.
+    EXPECT_GE(number(room, "reduction_estimated_scale_free"), 0.3) << r.output;
     EXPECT_EQ(number(room, "devices"), 3) << r.output;
     EXPECT_LE(number(room, "device_median_m"), 1.0) << r.output;
     EXPECT_GT(number(room, "bearings"), 1000) << r.output;
     EXPECT_LE(number(room, "central_beyond30"), 0.15) << r.output;
+    EXPECT_LE(number(room, "central_beyond30_unflagged"), number(room, "central_beyond30"))
+        << r.output;
     EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
 }
 

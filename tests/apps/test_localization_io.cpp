@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt/poses/CPosePDFParticles.h>
@@ -159,6 +160,38 @@ TEST(LocalizationTrajectory, AteAlignsRigidlyAsEvo)
     late.push_back(2e9, {0, 0, 0});
     late.push_back(2e9 + 1, {0, 0, 0});
     EXPECT_THROW(absoluteTrajectoryError(late, w.truth), std::runtime_error);
+}
+
+TEST(LocalizationTrajectory, AteWithCorrectScaleRemovesOnlyTheScale)
+{
+    const auto w = loctest::makeWorld(loctest::makeAps({{1, 1, 0}}), {});
+    // The truth 3 % too small, seen from another frame (odometry with a scale error): rigid
+    // alignment leaves an error, a similarity none, and says by how much it scaled.
+    const mrpt::poses::CPose2D T(3, -2, 0.7);
+    Trajectory2D shrunk, bent;
+    for (size_t i = 0; i < w.truth.size(); i += 10)
+    {
+        auto p = w.truth.poses[i];
+        p.x *= 0.97, p.y *= 0.97;
+        shrunk.push_back(w.truth.t[i], (T + mrpt::poses::CPose2D(p)).asTPose());
+        p.y += 0.3 * std::sin(p.x);  // and a shape error no scale can remove
+        bent.push_back(w.truth.t[i], (T + mrpt::poses::CPose2D(p)).asTPose());
+    }
+    EXPECT_GT(absoluteTrajectoryError(shrunk, w.truth).stats.max, 0.01);
+    const auto sim = absoluteTrajectoryError(shrunk, w.truth, true, true);
+    EXPECT_LT(sim.stats.max, 1e-6);
+    EXPECT_NEAR(sim.scale, 1 / 0.97, 1e-6);
+    EXPECT_NEAR(absoluteTrajectoryError(shrunk, w.truth).scale, 1.0, 0);
+    EXPECT_GT(absoluteTrajectoryError(bent, w.truth, true, true).stats.median, 0.05);
+    // The alignment of the same points with the similarity: the frame and the scale back.
+    std::vector<mrpt::math::TPoint2D> a, b;
+    for (size_t i = 0; i < shrunk.size(); ++i)
+        a.emplace_back(shrunk.poses[i].x, shrunk.poses[i].y),
+            b.emplace_back(w.truth.poses[i * 10].x, w.truth.poses[i * 10].y);
+    const auto s = alignSimilarity2D(a, b);
+    EXPECT_NEAR(s.scale, 1 / 0.97, 1e-6);
+    EXPECT_NEAR(mrpt::math::wrapToPi(s.pose.phi), -0.7, 1e-6);
+    EXPECT_THROW(alignSimilarity2D({{0, 0}}, {{1, 1}}), std::invalid_argument);
 }
 
 TEST(LocalizationRawlog, PfRawlogRoundTrip)

@@ -52,19 +52,32 @@ ErrorStats computeStats(std::vector<double> errors);
 /** Absolute trajectory error as evo computes it (`evo_ape --align`): estimate poses associated
  *  with ground truth by time (truth interpolated at the estimate's stamps), the rigid SE(2)
  *  transform that best maps estimate positions onto truth (Umeyama/Horn, no scale), then
- *  position errors. `align = false` compares in the given frames. */
+ *  position errors. `align = false` compares in the given frames. `correctScale` also scales
+ *  the estimate (evo's `--correct_scale`, Sim(2)): what is left is the error of its shape, as
+ *  for a map whose scale nothing observed (bearings with estimated APs). */
 struct AteResult
 {
     ErrorStats stats;
     std::vector<double> times, errors;  //!< per associated pose
-    mrpt::math::TPose2D alignment;      //!< applied to the estimate
+    mrpt::math::TPose2D alignment;      //!< applied to the estimate (after `scale`)
+    double scale = 1;                   //!< applied to the estimate first (correctScale)
     size_t unmatched = 0;               //!< estimate poses without truth at their time
 };
 AteResult absoluteTrajectoryError(
-    const Trajectory2D& estimate, const Trajectory2D& truth, bool align = true);
+    const Trajectory2D& estimate, const Trajectory2D& truth, bool align = true,
+    bool correctScale = false);
 
 /** Rigid 2-D transform T minimising Σ |T(a_i) − b_i|² (closed form). */
 mrpt::math::TPose2D alignRigid2D(
+    const std::vector<mrpt::math::TPoint2D>& a, const std::vector<mrpt::math::TPoint2D>& b);
+
+/** Similarity: s and T minimising Σ |T(s·a_i) − b_i|² (Umeyama). */
+struct Similarity2D
+{
+    mrpt::math::TPose2D pose;
+    double scale = 1;
+};
+Similarity2D alignSimilarity2D(
     const std::vector<mrpt::math::TPoint2D>& a, const std::vector<mrpt::math::TPoint2D>& b);
 
 }  // namespace mrpt_wifi::localization
