@@ -203,12 +203,12 @@ int main(int argc, char** argv)
                     res.odometryScale, mrpt::RAD2DEG(res.odometryYawDrift_radPerM), opt.odoScaleStd,
                     mrpt::RAD2DEG(opt.odoYawDriftStd_radPerM));
                 sum << b;
-                // Bearings are angles: scaling the trajectory and unknown APs together changes
-                // none, so only the odometry and its prior set the scale.
-                if (!opt.apsKnown)
-                    sum << "              with estimated APs no bearing observes the scale: the "
-                           "map keeps the odometry's scale error\n";
             }
+            // Bearings are angles: scaling the trajectory and unknown APs together changes none,
+            // so only the odometry (and its scale prior) sets the scale.
+            if (!opt.apsKnown)
+                sum << "  scale     : with estimated APs no bearing observes it: the map keeps the "
+                       "odometry's scale error\n";
             if (!res.converged)
             {
                 const std::string warn =

@@ -509,24 +509,18 @@ void runLoop(Room& room, const fs::path& dir)
             room, est == 0 ? "wifi-graphslam --aps" : "wifi-graphslam --estimate-aps");
         if (r.exitCode != 0) continue;
         auto& d = room.drift[est];
-        const auto slam = absoluteTrajectoryError(
-            Trajectory2D::fromTumFile((out / "trajectory_tum.txt").string()), room.loopTruth);
-        const auto odo = absoluteTrajectoryError(
-            Trajectory2D::fromTumFile((out / "odometry_nodes_tum.txt").string()), room.loopTruth);
+        const auto solution = Trajectory2D::fromTumFile((out / "trajectory_tum.txt").string());
+        const auto odometryNodes =
+            Trajectory2D::fromTumFile((out / "odometry_nodes_tum.txt").string());
+        const auto slam = absoluteTrajectoryError(solution, room.loopTruth);
         d.ran = true;
         d.slamAte_m = slam.stats.median;
-        d.odometryAte_m = odo.stats.median;
+        d.odometryAte_m = absoluteTrajectoryError(odometryNodes, room.loopTruth).stats.median;
         d.reduction = 1 - d.slamAte_m / d.odometryAte_m;
         d.scaleFreeReduction =
-            1 - absoluteTrajectoryError(
-                    Trajectory2D::fromTumFile((out / "trajectory_tum.txt").string()),
-                    room.loopTruth, true, true)
-                        .stats.median /
-                    absoluteTrajectoryError(
-                        Trajectory2D::fromTumFile((out / "odometry_nodes_tum.txt").string()),
-                        room.loopTruth, true, true)
-                        .stats.median;
-        d.aligned = Trajectory2D::fromTumFile((out / "trajectory_tum.txt").string());
+            1 - absoluteTrajectoryError(solution, room.loopTruth, true, true).stats.median /
+                    absoluteTrajectoryError(odometryNodes, room.loopTruth, true, true).stats.median;
+        d.aligned = solution;
         const mrpt::poses::CPose2D T(slam.alignment);
         for (auto& p : d.aligned.poses) p = (T + mrpt::poses::CPose2D(p)).asTPose();
     }
