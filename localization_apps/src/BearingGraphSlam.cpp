@@ -467,13 +467,8 @@ GraphSlamResult solveOnce(
         if (!w.empty())
         {
             res.bearingsWithin3Sigma = double(within) / double(w.size());
-            const auto median = [](std::vector<double>& v)
-            {
-                std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-                return v[v.size() / 2];
-            };
-            res.medianWhitenedResidual = median(w);
-            res.medianResidual_deg = median(deg);
+            res.medianWhitenedResidual = detail::median(w);
+            res.medianResidual_deg = detail::median(deg);
         }
     }
 

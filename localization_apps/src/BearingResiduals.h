@@ -1,14 +1,17 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #pragma once
 
-// Ceres residuals shared by graph SLAM and device mapping (internal header). Angles are
+// Ceres residuals shared by graph SLAM, the track without odometry, the window smoother and
+// device mapping (internal header). Angles are
 // compared on the circle: wrap(a) = atan2(sin a, cos a) keeps derivatives smooth. For linear
 // arrays the residual uses whichever of the two reported candidates is closer to the prediction
 // (the other one is the array's mirror image, equally consistent with the CSI).
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace mrpt_wifi::localization::detail
 {
@@ -17,6 +20,16 @@ T wrapAngle(const T& a)
 {
     using std::atan2, std::cos, std::sin;
     return atan2(sin(a), cos(a));
+}
+
+/** The median of v (the upper one of an even count), 0 for none: how the solvers summarise
+ *  their residuals. */
+inline double median(std::vector<double> v)
+{
+    if (v.empty()) return 0;
+    const auto mid = v.begin() + long(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
 }
 
 template <typename T>

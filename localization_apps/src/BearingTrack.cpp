@@ -84,29 +84,24 @@ struct NonholonomicResidual
     }
 };
 
-/** A bearing taken between two nodes: the pose interpolated at its time, the known
- *  transmitter fixed. AoA at the robot's array, or AoD at the transmitter. */
+/** A bearing taken between two nodes: the graph's AoA or AoD residual at the pose
+ *  interpolated at its time, the known transmitter fixed. */
 struct InterpolatedBearingResidual
 {
-    double alpha;         // 0 at node a, 1 at node b
-    double ox, oy, oth;   // the receive array on the robot
-    double tx, ty, tyaw;  // the transmitter
-    double z, mirror, sigma;
-    bool ambiguous, departure;
+    double alpha;  // 0 at node a, 1 at node b
+    detail::AoaResidual aoa;
+    detail::AodResidual aod;
+    bool departure;
+    double ap[3];  // the transmitter: x, y, yaw
 
     template <typename T>
     bool operator()(const T* a, const T* b, T* r) const
     {
-        using std::atan2, std::cos, std::sin;
-        const T x = a[0] + T(alpha) * (b[0] - a[0]);
-        const T y = a[1] + T(alpha) * (b[1] - a[1]);
-        const T th = a[2] + T(alpha) * detail::wrapAngle(b[2] - a[2]);
-        const T c = cos(th), s = sin(th);
-        const T sx = x + c * T(ox) - s * T(oy), sy = y + s * T(ox) + c * T(oy);
-        const T pred = departure ? atan2(sy - T(ty), sx - T(tx)) - T(tyaw)
-                                 : atan2(T(ty) - sy, T(tx) - sx) - th - T(oth);
-        r[0] = detail::closestCandidate(pred, z, ambiguous, mirror) / T(sigma);
-        return true;
+        const T pose[3] = {
+            a[0] + T(alpha) * (b[0] - a[0]), a[1] + T(alpha) * (b[1] - a[1]),
+            a[2] + T(alpha) * detail::wrapAngle(b[2] - a[2])};
+        const T tx[3] = {T(ap[0]), T(ap[1]), T(ap[2])};
+        return departure ? aod(pose, tx, r) : aoa(pose, tx, r);
     }
 };
 
@@ -133,13 +128,6 @@ TPose2D poseAt(const Trajectory2D& track, double t)
     TPose2D p;
     if (track.interpolate(t, p, std::numeric_limits<double>::infinity())) return p;
     return t < track.t.front() ? track.poses.front() : track.poses.back();
-}
-
-double median(std::vector<double> v)
-{
-    if (v.empty()) return 0;
-    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
-    return v[v.size() / 2];
 }
 }  // namespace
 
@@ -209,20 +197,14 @@ TrackResult solveBearingTrack(
         for (const auto& u : uses)
         {
             const double sigma = sigmaOf(u) * decorrelation.factor(u.b->transmitter);
-            const auto& s = u.b->sensorPose;
+            const auto& b = *u.b;
+            const auto& s = b.sensorPose;
             auto* r = new InterpolatedBearingResidual{
                 u.alpha,
-                s.x,
-                s.y,
-                s.phi,
-                u.tx->pose.x,
-                u.tx->pose.y,
-                u.tx->pose.phi,
-                u.departure ? u.b->aod : u.b->aoa,
-                u.departure ? u.b->aodMirror : u.b->aoaMirror,
-                sigma,
-                u.departure ? u.b->aodAmbiguous : u.b->aoaAmbiguous,
-                u.departure};
+                {s.x, s.y, s.phi, b.aoa, b.aoaMirror, sigma, b.aoaAmbiguous},
+                {s.x, s.y, b.aod, b.aodMirror, sigma, b.aodAmbiguous},
+                u.departure,
+                {u.tx->pose.x, u.tx->pose.y, u.tx->pose.phi}};
             bearingBlocks.push_back(problem.AddResidualBlock(
                 new ceres::AutoDiffCostFunction<InterpolatedBearingResidual, 1, 3, 3>(r),
                 detail::makeLoss(opt.loss, opt.lossScale), X[u.k].data(), X[u.k + 1].data()));
@@ -269,7 +251,7 @@ TrackResult solveBearingTrack(
             if (problem.EvaluateResidualBlock(id, false, &cost, &res, nullptr))
                 whitened.push_back(std::abs(res));
         }
-        r.medianWhitenedResidual = median(whitened);
+        r.medianWhitenedResidual = detail::median(std::move(whitened));
         best = std::move(r);
     }
     if (best.poses.size() == 0)

@@ -224,8 +224,7 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
         d.poseStd_m = std::sqrt(var);
         d.cov[0] += var, d.cov[2] += var;
     }
-    std::nth_element(res.begin(), res.begin() + long(res.size() / 2), res.end());
-    d.medianResidual_deg = mrpt::RAD2DEG(res[res.size() / 2]);
+    d.medianResidual_deg = mrpt::RAD2DEG(detail::median(std::move(res)));
     d.baseline_deg = first ? 0 : mrpt::RAD2DEG(dmax - dmin);
     d.localized = sum.IsSolutionUsable() && d.inliers >= o.minRays;
     if (!d.localized && d.note.empty())

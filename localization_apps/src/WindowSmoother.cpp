@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "BearingResiduals.h"
+
 namespace mrpt_wifi::localization
 {
 using mrpt::math::TPose2D;
@@ -176,10 +178,7 @@ double WindowSmoother::recentAoaResidual(
             r = std::min(r, std::abs(mrpt::math::wrapToPi(predicted - b.aoaMirror)));
         residuals.push_back(r);
     }
-    if (residuals.empty()) return 0;  // nothing recent to check against
-    auto mid = residuals.begin() + long(residuals.size() / 2);
-    std::nth_element(residuals.begin(), mid, residuals.end());
-    return *mid;
+    return detail::median(std::move(residuals));  // 0: nothing recent to check against
 }
 
 bool WindowSmoother::solve(
