@@ -2,10 +2,10 @@
 #pragma once
 
 // Ceres residuals shared by graph SLAM, the track without odometry, the window smoother and
-// device mapping (internal header). Angles are
-// compared on the circle: wrap(a) = atan2(sin a, cos a) keeps derivatives smooth. For linear
-// arrays the residual uses whichever of the two reported candidates is closer to the prediction
-// (the other one is the array's mirror image, equally consistent with the CSI).
+// device mapping (internal header). Angles are compared on the circle: wrap(a) =
+// atan2(sin a, cos a) keeps derivatives smooth. For linear arrays the residual uses whichever of
+// the two reported candidates is closer to the prediction (the other one is the array's mirror
+// image, equally consistent with the CSI).
 
 #include <ceres/ceres.h>
 
