@@ -53,20 +53,21 @@ void WindowSmootherOptions::loadFromConfigFile(
     withoutOdometry = c.read_bool(s, "without_odometry", withoutOdometry);
     trackWindow_s = c.read_double(s, "track_window_s", trackWindow_s);
     trackSwitchCost = c.read_double(s, "track_switch_cost", trackSwitchCost);
+    trackRestartHeadings = c.read_int(s, "track_restart_headings", trackRestartHeadings);
     track.loadFromConfigFile(c, s);
     if (!(window_s > 0) || !(minWindow_s >= 0) || !(minWindow_s <= window_s) ||
         !(solvePeriod_s > 0) || !(maxMedianWhitenedResidual > 0) || !(maxFilterSpread_m > 0) ||
         !(maxRecentResidual_rad > 0) || !(graph.nodePeriod_s > 0) || !(graph.odoScaleStd >= 0) ||
         !(graph.odoYawDriftStd_radPerM >= 0) || !(graph.minStd_rad > 0) ||
         !(trackWindow_s >= minWindow_s) || !(trackWindow_s >= 2 * track.nodePeriod_s) ||
-        !(trackSwitchCost >= 0))
+        !(trackSwitchCost >= 0) || trackRestartHeadings < 0)
         throw std::invalid_argument(
             "[" + s +
             "]: window_s, solve_period_s, max_median_whitened_residual, max_filter_spread_m, "
             "max_recent_residual_deg, "
             "node_period_s and min_std_deg must be > 0, min_window_s in [0, window_s], "
             "track_window_s at least min_window_s and two track_node_period_s, "
-            "track_switch_cost >= 0, "
+            "track_switch_cost and track_restart_headings >= 0, "
             "odometry_scale_std and odometry_yaw_drift_deg_per_m >= 0");
     if (graph.loss != "cauchy" && graph.loss != "huber" && graph.loss != "none")
         throw std::invalid_argument(
@@ -85,7 +86,10 @@ std::string WindowSmootherOptions::asString() const
         o << "; without odometry a " << trackWindow_s << " s track, a node every "
           << track.nodePeriod_s << " s, speed change sigma " << track.accelStd_mps2
           << " m/s^2, turn " << mrpt::RAD2DEG(track.turnAccelStd_radps2) << " deg/s^2, sideways "
-          << track.lateralStd_m << " m per node" << (track.forwardOnly ? ", forward only" : "");
+          << track.lateralStd_m << " m per node" << (track.forwardOnly ? ", forward only" : "")
+          << (trackRestartHeadings > 0 ? ", after a restart also from the last accepted pose at " +
+                                             std::to_string(trackRestartHeadings) + " headings"
+                                       : std::string());
     return o.str();
 }
 
@@ -131,7 +135,8 @@ std::optional<TPose2D> WindowSmoother::update(
     double t, const TPose2D& filterEstimate, const std::function<double()>& filterSpread_m)
 {
     if (!opts_.enabled) return std::nullopt;
-    if (t < lastSolve_t_) solved_.reset(), track_.reset(), lastSolve_t_ = -1e300;  // a new run
+    if (t < lastSolve_t_)  // a new run
+        solved_.reset(), track_.reset(), restartPose_.reset(), lastSolve_t_ = -1e300;
     const bool tracking = odometry_.empty() && opts_.withoutOdometry;
     if (tracking && (filterEstimates_.empty() || t > filterEstimates_.back().first))
     {
@@ -276,6 +281,17 @@ bool WindowSmoother::solveTrack(
         filterTrack.poses.back() = filterEstimate;
         in.starts.push_back(std::move(filterTrack));
     }
+    if (restartPose_ && restartPose_->first < t - opts_.trackWindow_s) restartPose_.reset();
+    if (restartPose_)
+        for (int k = 0; k < opts_.trackRestartHeadings; ++k)
+        {
+            TPose2D standing = restartPose_->second;
+            standing.phi =
+                mrpt::math::wrapToPi(standing.phi + 2 * M_PI * k / opts_.trackRestartHeadings);
+            Trajectory2D start;
+            start.push_back(in.t0, standing);
+            in.starts.push_back(std::move(start));
+        }
     if (in.starts.empty()) return false;
     mrpt::system::CTicTac timer;
     TrackResult r;
@@ -295,10 +311,13 @@ bool WindowSmoother::solveTrack(
     {
         ++restarts_;
         forgetBefore(t);
+        if (track_ && opts_.trackRestartHeadings > 0)
+            restartPose_.emplace(track_->t.back(), track_->poses.back());
         return false;
     }
     ++accepted_;
     track_ = std::move(r.poses);
+    restartPose_.reset();
     return true;
 }
 

@@ -35,6 +35,11 @@ struct WorldOptions
     double multipathAmplitude = 0;
     double multipathScale_m = 1.5;
     uint64_t seed = 3;
+    /** > 0: at each corner the robot stands and turns on the spot at this rate [rad/s]
+     *  (0: it turns at once), and its bearings meanwhile have σ turningAoaStd (a real array's
+     *  bearings smear while the robot turns). */
+    double cornerTurnRate = 0;
+    double turningAoaStd = 1.0;
     std::vector<mrpt::math::TPoint2D> loop = {{2, 2}, {8, 2}, {8, 4}, {2, 4}};
 };
 
@@ -71,13 +76,21 @@ inline World makeWorld(const TransmitterMap& aps, const WorldOptions& o)
     const double dt = 0.01;
     size_t seg = 0;
     mrpt::math::TPose2D p(o.loop[0].x, o.loop[0].y, 0);
+    std::vector<bool> turning;  // per truth sample
     const double t0 = 1700000000.0;
     for (double t = 0; t <= o.duration_s; t += dt)
     {
         const auto& goal = o.loop[(seg + 1) % o.loop.size()];
         const double dx = goal.x - p.x, dy = goal.y - p.y, d = std::hypot(dx, dy);
+        const double turn = wrapToPi(std::atan2(dy, dx) - p.phi);
+        bool turningNow = false;
         if (d < o.speed * dt)
             ++seg;
+        else if (o.cornerTurnRate > 0 && t > 0 && std::abs(turn) > o.cornerTurnRate * dt)
+        {
+            p.phi = wrapToPi(p.phi + std::copysign(o.cornerTurnRate * dt, turn));
+            turningNow = true;
+        }
         else
         {
             p.phi = std::atan2(dy, dx);
@@ -85,6 +98,7 @@ inline World makeWorld(const TransmitterMap& aps, const WorldOptions& o)
             p.y += o.speed * dt * dy / d;
         }
         w.truth.push_back(t0 + t, p);
+        turning.push_back(turningNow);
     }
     // Odometry: integrate noisy, biased increments every 0.05 s.
     mrpt::math::TPose2D odo(0, 0, 0);
@@ -154,10 +168,10 @@ inline World makeWorld(const TransmitterMap& aps, const WorldOptions& o)
                     out = mv, m = v;
             };
             r.hasAoa = true;
-            r.aoaStd = o.aoaStd;
+            r.aoaStd = turning[i] ? o.turningAoaStd : o.aoaStd;
             report(
                 w.rxArray,
-                noisy(predictAoa(s, ap.pose.x, ap.pose.y) + multipath(j, s.x, s.y), o.aoaStd),
+                noisy(predictAoa(s, ap.pose.x, ap.pose.y) + multipath(j, s.x, s.y), r.aoaStd),
                 r.aoa, r.aoaAmbiguous, r.aoaMirror);
             if (o.aod)
             {

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 
 #include "SyntheticWorld.h"
 
@@ -173,7 +174,7 @@ TEST(WindowSmoother, ConfigErrorsNameTheKey)
          {"window_s = 0", "min_window_s = 30", "solve_period_s = -1", "loss = tukey",
           "max_median_whitened_residual = 0", "track_window_s = 1", "track_node_period_s = 0",
           "track_accel_std = -1", "track_turn_accel_std_deg = 0", "track_lateral_std_m = 0",
-          "track_switch_cost = -1"})
+          "track_switch_cost = -1", "track_restart_headings = -1"})
     {
         mrpt::config::CConfigFileMemory ini("[WindowSmoother]\n" + bad + "\n");
         WindowSmootherOptions o;
@@ -308,4 +309,48 @@ TEST(WindowSmoother, WithoutOdometryFitsATrackToTheBearings)
     }
     EXPECT_EQ(outside, 0u);
     EXPECT_GT(inside, 0u);
+}
+
+TEST(WindowSmoother, WithoutOdometryResumesWhereTheRobotStoppedToTurn)
+{
+    // The robot stands at each corner and turns on the spot (by 75-110 deg) for about 2 s, its
+    // bearings wide meanwhile; the filter, its constant-velocity guess driving on, is lost from
+    // the first corner on (it carries straight on along the first side).
+    WorldOptions o;
+    o.duration_s = 60;
+    o.loop = {{2, 2}, {8, 2.5}, {7, 6}, {2, 5.5}};
+    o.aod = false;
+    o.rate_Hz = 10;
+    o.cornerTurnRate = M_PI / 4;
+    const auto w = makeWorld(roomAps(), o);
+    const double side = std::hypot(6.0, 0.5), firstCorner = w.truth.t.front() + side / o.speed;
+    const auto lostFilter = [&](double t, const mrpt::math::TPose2D& truth)
+    {
+        if (t < firstCorner) return truth;
+        const double d = side + o.speed * (t - firstCorner);
+        return mrpt::math::TPose2D(2 + d * 6 / side, 2 + d * 0.5 / side, std::atan2(0.5, 6.0));
+    };
+    // Median error of the smoothed estimates from 10 s after the first corner on, and their
+    // count.
+    const auto lateError = [&](int restartHeadings, size_t& late)
+    {
+        WindowSmootherOptions opts;
+        opts.trackRestartHeadings = restartHeadings;
+        WindowSmoother smoother(opts, w.aps);
+        const auto r = replay(w, Trajectory2D(), smoother, lostFilter);
+        std::vector<double> errors;
+        for (size_t i = 0; i < r.times.size(); ++i)
+            if (r.times[i] > firstCorner + 10) errors.push_back(r.smoothedErrors[i]);
+        late = errors.size();
+        return errors.empty() ? HUGE_VAL : median(errors);
+    };
+    size_t refined = 0, refinedFromFilter = 0;
+    const double shipped = lateError(WindowSmootherOptions().trackRestartHeadings, refined);
+    const double fromFilterOnly = lateError(0, refinedFromFilter);
+    std::cout << "from 10 s after the first corner: median error " << shipped << " m over "
+              << refined << " estimates; from the filter only: " << fromFilterOnly << " m over "
+              << refinedFromFilter << "\n";
+    EXPECT_LT(shipped, 0.3);
+    EXPECT_GT(refined, 500u);        // of about 1500 bearings from then on
+    EXPECT_GT(fromFilterOnly, 1.0);  // what the restart pose is for
 }

@@ -54,6 +54,15 @@ struct WindowSmootherOptions
     /** `track_switch_cost`: the previous track continued stays the estimate unless the
      *  filter's start ends with a cost lower by more than this (TrackInput::firstStartMargin). */
     double trackSwitchCost = 3;
+    /** `track_restart_headings`: when a track's newest pose stops explaining the newest
+     *  bearings (a restart), its last accepted pose is offered as a start of the next tracks,
+     *  standing, at this many headings spread over the circle, beside the filter's estimates,
+     *  until a track is accepted again or it is older than track_window_s. Why: a robot that
+     *  stops and turns on the spot gives wide bearings while its track drives on at its last
+     *  speed; the filter, whose constant-velocity guess drove on too, is no better start, while
+     *  the place where the track was last right is where the robot turned. 0: the filter's
+     *  estimates only. */
+    int trackRestartHeadings = 4;
     TrackMotionPrior track;  //!< `track_*` keys (TrackMotionPrior::loadFromConfigFile)
 
     static GraphSlamOptions defaultGraph();
@@ -81,7 +90,8 @@ struct WindowSmootherOptions
  *
  *  Without odometry (none added, options.withoutOdometry) the window is a track fitted to the
  *  bearings with a motion prior instead (solveBearingTrack), started from the filter's
- *  estimates given to update() and from the previous track continued at its last velocity;
+ *  estimates given to update() and from the previous track continued at its last velocity
+ *  (after a restart also from the last accepted pose, standing: trackRestartHeadings);
  *  between solves the newest node continued at that velocity is the estimate. Not
  *  thread-safe. */
 class WindowSmoother
@@ -147,6 +157,8 @@ private:
      *  track. */
     std::deque<std::pair<double, mrpt::math::TPose2D>> filterEstimates_;
     std::optional<Trajectory2D> track_;
+    /** Without odometry: the newest pose of the last accepted track before a restart. */
+    std::optional<std::pair<double, mrpt::math::TPose2D>> restartPose_;
     double lastSolve_t_ = -1e300;
     size_t solves_ = 0, accepted_ = 0, restarts_ = 0;
     double solveTime_s_ = 0;
