@@ -313,7 +313,7 @@ TEST(WindowSmoother, WithoutOdometryFitsATrackToTheBearings)
 
 TEST(WindowSmoother, WithoutOdometryResumesWhereTheRobotStoppedToTurn)
 {
-    // The robot stands at each corner and turns on the spot (by 75-110 deg) for about 2 s, its
+    // The robot stands at each corner and turns on the spot (by 80-101 deg) for about 2 s, its
     // bearings wide meanwhile; the filter, its constant-velocity guess driving on, is lost from
     // the first corner on (it carries straight on along the first side).
     WorldOptions o;
