@@ -323,12 +323,15 @@ TEST(WindowSmoother, WithoutOdometryResumesWhereTheRobotStoppedToTurn)
     o.rate_Hz = 10;
     o.cornerTurnRate = M_PI / 4;
     const auto w = makeWorld(roomAps(), o);
-    const double side = std::hypot(6.0, 0.5), firstCorner = w.truth.t.front() + side / o.speed;
+    const auto &start = o.loop[0], &corner = o.loop[1];
+    const double dx = corner.x - start.x, dy = corner.y - start.y, side = std::hypot(dx, dy);
+    const double firstCorner = w.truth.t.front() + side / o.speed;
     const auto lostFilter = [&](double t, const mrpt::math::TPose2D& truth)
     {
         if (t < firstCorner) return truth;
         const double d = side + o.speed * (t - firstCorner);
-        return mrpt::math::TPose2D(2 + d * 6 / side, 2 + d * 0.5 / side, std::atan2(0.5, 6.0));
+        return mrpt::math::TPose2D(
+            start.x + d * dx / side, start.y + d * dy / side, std::atan2(dy, dx));
     };
     // Median error of the smoothed estimates from 10 s after the first corner on, and their
     // count.
