@@ -16,6 +16,7 @@
  * Prints progress per room, a per-room table, the share of rooms meeting each target, the worst
  * rooms with what makes them fail, writes WORK/rooms.csv and pictures of the failing rooms. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/random/RandomGenerators.h>
@@ -24,6 +25,8 @@
 #include <mrpt_wifi/localization/Plot.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/localization/WindowSmoother.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
 #include <algorithm>
@@ -42,6 +45,7 @@
 #include "BearingAccuracy.h"
 #include "EmulatorProcess.h"
 #include "SshdFixture.h"  // freeLoopbackPort
+#include "TrackFromTruth.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -51,6 +55,7 @@ namespace
 {
 const std::string kShare = std::string(MRPT_WIFI_SOURCE_DIR) + "/share";
 const std::string kSensorPose = "--sensor-pose 0.1 0 0.4 0 0 0";  // the random rooms' receiver
+const mrpt::math::TPose2D kSensorPose2D(0.1, 0, 0);               // the same, in the plane
 
 struct Options
 {
@@ -214,7 +219,10 @@ struct Room
     DeviceFigures devices;
     BearingFigures bearings;            //!< both drives
     BearingFigures bearingsOfDrive[2];  //!< the kidnapped (random) drive, the loop
-    std::vector<std::string> errors;    //!< programs that failed
+    /** Without odometry, the window smoother's track fitted from the true poses of the
+     *  kidnapped drive: median error of its newest node (trackFromTruthOfRoom). */
+    double noOdoTrackFromTruth_m = NAN;
+    std::vector<std::string> errors;  //!< programs that failed
     double wall_s = 0;
 };
 
@@ -412,6 +420,36 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
                 Trajectory2D::fromTumFile((out / "estimate_tum.txt").string()), room.kidnappedTruth,
                 o);
     }
+}
+
+/** loctest::trackFromTruth on the kidnapped drive of the room in `dir` (a room folder of a
+ *  sweep), configured as wifi-pf-localization runs the room's pf.ini without odometry. */
+loctest::TrackFromTruth trackFromTruthOfRoom(const fs::path& dir)
+{
+    const auto pfIni = dir / "pf.ini", kt = dir / "kidnapped" / "truth";
+    if (!fs::exists(pfIni)) throw std::runtime_error("no " + pfIni.string());
+    const mrpt::config::CConfigFile ini(pfIni.string());
+    WindowSmootherOptions options;
+    options.loadFromConfigFile(ini, "WindowSmoother");
+    UnknownMotion motion;
+    motion.loadFromConfigFile(ini, "UnknownMotion");
+    options.track.forwardOnly = motion.forwardOnly;
+    const std::string likelihood = "MetricMap_wifiBearingMap_00_likelihoodOpts";
+    options.graph.useAoa = ini.read_bool(likelihood, "use_aoa", true);
+    options.graph.useAod = ini.read_bool(likelihood, "use_aod", true);
+    const std::string creation = "MetricMap_wifiBearingMap_00_creationOpts";
+    const mrpt::math::TBoundingBox area(
+        {ini.read_double(creation, "min_x", 0, true), ini.read_double(creation, "min_y", 0, true),
+         0},
+        {ini.read_double(creation, "max_x", 0, true), ini.read_double(creation, "max_y", 0, true),
+         0});
+    const auto aps = TransmitterMap::fromYamlFile((kt / "transmitters.yaml").string());
+    BearingCsvOptions co;
+    co.sensorPose = kSensorPose2D;
+    co.names = &aps;
+    const auto bearings = readBearingCsv((dir / "kidnapped" / "bearings.csv").string(), co);
+    const auto truth = Trajectory2D::fromTumFile((kt / "trajectory_tum.txt").string());
+    return loctest::trackFromTruth(bearings, aps, truth, options, area);
 }
 
 /** wifi-localize on the room streamed by the emulator in real time (CSI and, with odometry,
@@ -647,6 +685,9 @@ Room evaluateRoom(uint32_t seed, const Options& o)
             (dir / "kidnapped/truth/frames.csv").string(), rx, bearingErrors);
         std::cerr << ", offline PF" << std::flush;
         guarded(room, "offline PF", [&] { runOffline(room, dir, o); });
+        guarded(
+            room, "track from the true poses",
+            [&] { room.noOdoTrackFromTruth_m = trackFromTruthOfRoom(dir).median_m; });
         if (o.live)
         {
             std::cerr << ", live" << std::flush;
@@ -795,18 +836,34 @@ std::string whyItFails(const Room& r)
             "multipath (bearings: median " + fmt(r.bearings.centralMedian_deg, 1) + "°, " +
             fmt(100 * r.bearings.centralBeyond30, 1) + " % beyond 30°, " +
             fmt(100 * r.bearings.centralBeyond30Unflagged, 1) + " % also beyond 3σ)");
+    // Without odometry, the track fitted from the true poses tells the two apart: off too, the
+    // bearings leave the pose open (information); close, the filter settled elsewhere.
+    const auto misses = [](const KidnappedFigures& k)
+    { return k.ran && (!k.converged || k.medianAfter_m > 0.3); };
+    const bool noOdoMisses = misses(r.kidnapped[0][1]) || misses(r.kidnapped[1][1]);
+    if (noOdoMisses && r.noOdoTrackFromTruth_m > 0.3)
+        why.push_back(
+            "information (without odometry a track fitted from the true poses is itself " +
+            fmt(r.noOdoTrackFromTruth_m) + " m off at its newest pose)");
     // A filter that settles away from the robot with clean bearings found another pose that
     // explains them (the linear array's mirror, or a symmetric AP layout).
     for (int odo = 0; odo < 2; ++odo)
     {
         const auto& k = r.kidnapped[0][odo];
-        if (k.ran && (!k.converged || k.medianAfter_m > 0.3) && r.bearings.centralBeyond30 <= 0.02)
+        const bool trackFits = r.noOdoTrackFromTruth_m <= 0.3;
+        const bool suspect = odo == 1 && !std::isnan(r.noOdoTrackFromTruth_m)
+                                 ? trackFits
+                                 : r.bearings.centralBeyond30 <= 0.02;
+        if (misses(k) && suspect)
         {
             why.push_back(
                 std::string("ambiguity (") + kRunNames[0][odo] + ": " +
                 (k.converged ? "median " + fmt(k.medianAfter_m) + " m"
                              : "never converged, worst " + fmt(k.worstAll_m, 1) + " m") +
-                " with clean bearings)");
+                (odo == 1 && trackFits ? " while a track fitted from the true poses is " +
+                                             fmt(r.noOdoTrackFromTruth_m) + " m off"
+                                       : std::string(" with clean bearings")) +
+                ")");
             break;
         }
     }
@@ -920,7 +977,7 @@ void writeCsv(const std::vector<Room>& rooms, const std::string& path)
          "devices,devices_localized,device_median_m,device_max_m,devices_inside_95,"
          "bearings,bearings_central,central_beyond30,all_beyond30,central_median_deg,"
          "central_beyond30_unflagged,"
-         "random_drive_central_beyond30,loop_central_beyond30,wall_s,"
+         "random_drive_central_beyond30,loop_central_beyond30,noodo_track_from_truth_m,wall_s,"
          "failed_programs\n";
     for (const auto& r : rooms)
     {
@@ -942,10 +999,61 @@ void writeCsv(const std::vector<Room>& rooms, const std::string& path)
           << "," << r.bearings.central << "," << r.bearings.centralBeyond30 << ","
           << r.bearings.beyond30 << "," << r.bearings.centralMedian_deg << ","
           << r.bearings.centralBeyond30Unflagged << "," << r.bearingsOfDrive[0].centralBeyond30
-          << "," << r.bearingsOfDrive[1].centralBeyond30 << "," << r.wall_s << ",\"";
+          << "," << r.bearingsOfDrive[1].centralBeyond30 << "," << r.noOdoTrackFromTruth_m << ","
+          << r.wall_s << ",\"";
         for (const auto& e : r.errors) f << e << ";";
         f << "\"\n";
     }
+}
+
+/** --track-from-truth: trackFromTruthOfRoom for every room-N folder of an earlier sweep, a
+ *  table of them and the rooms within 0.3 m. Returns the exit code (1: no room, or one failed). */
+int reportTrackFromTruth(const fs::path& work)
+{
+    std::vector<std::pair<unsigned long, fs::path>> dirs;
+    if (fs::is_directory(work))
+        for (const auto& e : fs::directory_iterator(work))
+        {
+            const auto name = e.path().filename().string();
+            if (e.is_directory() && name.rfind("room-", 0) == 0 &&
+                name.find_first_not_of("0123456789", 5) == std::string::npos && name.size() > 5)
+                dirs.emplace_back(std::stoul(name.substr(5)), e.path());
+        }
+    if (dirs.empty())
+        throw std::invalid_argument(
+            "--track-from-truth: no room-N folder in '" + work.string() +
+            "' (the --work folder of an earlier run)");
+    std::sort(dirs.begin(), dirs.end());
+    std::cout << "# No-odometry track fitted from the true poses: " << work.string() << "\n\n"
+              << "Every second from the window smoother's min_window_s on, its track of the last "
+                 "track_window_s fitted from the true poses (each room's pf.ini, the recorded "
+                 "bearings); error of the newest pose, the one the smoother reports.\n\n"
+              << "| room | median [m] | 90 % [m] | windows |\n|---|---|---|---|\n";
+    size_t within = 0, solved = 0, failed = 0;
+    for (const auto& [seed, dir] : dirs)
+    {
+        std::cerr << "[room " << seed << "] track from the true poses\n";
+        try
+        {
+            const auto t = trackFromTruthOfRoom(dir);
+            auto e = t.newestErrors_m;
+            std::sort(e.begin(), e.end());
+            const double p90 = e.empty() ? NAN : e[std::min(e.size() - 1, e.size() * 9 / 10)];
+            std::cout << "| " << seed << " | " << fmt(t.median_m) << " | " << fmt(p90) << " | "
+                      << e.size() << " |\n";
+            if (!e.empty()) ++solved;
+            if (t.median_m <= 0.3) ++within;
+        }
+        catch (const std::exception& ex)
+        {
+            ++failed;
+            std::cerr << "[localization-accuracy] " << dir.string() << ": " << ex.what() << "\n";
+        }
+    }
+    std::cout << "\nRooms whose track from the true poses is within 0.3 m: " << within << " of "
+              << solved << (failed ? " (" + std::to_string(failed) + " failed, see above)" : "")
+              << "\n";
+    return failed ? 1 : 0;
 }
 
 void printReport(const std::vector<Room>& rooms, bool evaluation, const Options& o)
@@ -959,7 +1067,11 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
                  "odometry or without) against the true poses "
               << "(converged: error < " << fmt(o.convergedThreshold_m, 1) << " m for "
               << fmt(o.convergedHold_s, 0)
-              << " s; worst = maximum after convergence). Drift and devices: " << o.laps
+              << " s; worst = maximum after convergence). No-odo track from true poses: the "
+                 "window smoother's no-odometry track fitted every second from the true poses "
+                 "instead of the filter's (its best case), median error of its newest pose; above "
+                 "0.3 m the bearings alone leave the pose open. Drift and devices: "
+              << o.laps
               << " laps of a loop; ATE of the solution and of the odometry against the true poses "
                  "(rigid alignment; \"without scale\": a similarity, as the scale of a map with "
                  "estimated APs is the odometry's); devices mapped on the odometry (start at the "
@@ -973,10 +1085,11 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
               << ".\n\n";
     std::cout << "| room | size [m] | odo scale / yaw drift | kidnapped offline odo / none [m] "
                  "| converge [s] | live odo / none [m] | worst after conv. [m] (off odo / none) "
-                 "| ATE odo [m] | drift red. known / est. (est. without scale) | device median [m] "
+                 "| no-odo track from true poses [m] | ATE odo [m] | drift red. known / est. (est. "
+                 "without scale) | device median [m] "
                  "/ in 95 % "
                  "| bearings >30° (also beyond 3σ) |\n"
-                 "|---|---|---|---|---|---|---|---|---|---|---|\n";
+                 "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rooms)
     {
         const auto& k = r.kidnapped;
@@ -987,8 +1100,8 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
                   << " / " << fmt(k[0][1].timeToConverge_s, 1) << " | "
                   << fmt(kidnappedMedian(k[1][0])) << " / " << fmt(kidnappedMedian(k[1][1]))
                   << " | " << fmt(k[0][0].worstAfter_m) << " / " << fmt(k[0][1].worstAfter_m)
-                  << " | " << fmt(r.drift[0].odometryAte_m) << " | "
-                  << fmt(100 * r.drift[0].reduction, 0) << " / "
+                  << " | " << fmt(r.noOdoTrackFromTruth_m) << " | " << fmt(r.drift[0].odometryAte_m)
+                  << " | " << fmt(100 * r.drift[0].reduction, 0) << " / "
                   << fmt(100 * r.drift[1].reduction, 0) << " % ("
                   << fmt(100 * r.drift[1].scaleFreeReduction, 0) << " %) | "
                   << fmt(r.devices.medianError_m) << " / " << r.devices.inside << " of "
@@ -1065,7 +1178,7 @@ int main(int argc, char** argv)
                 "each target of issue 19 and the rooms that miss one, with pictures. Seeds < "
                 "1000 are for development, >= 1000 (--eval) for evaluation.",
                 ' ', "0.1");
-            TCLAP::ValueArg<unsigned> argRooms("", "rooms", "Number of rooms", true, 0, "N", cmd);
+            TCLAP::ValueArg<unsigned> argRooms("", "rooms", "Number of rooms", false, 0, "N", cmd);
             TCLAP::SwitchArg argEval(
                 "", "eval", "Evaluation rooms (seeds from 1000); default: development (from 1)",
                 cmd);
@@ -1097,9 +1210,21 @@ int main(int argc, char** argv)
                 "", "aps",
                 "Access points per room (the first three are the seed's whatever the count)", false,
                 3, "N", cmd);
+            TCLAP::ValueArg<std::string> argTrackFromTruth(
+                "", "track-from-truth",
+                "Run no room: for each room-N folder of an earlier --work DIR, the window "
+                "smoother's no-odometry track fitted from the true poses (its best case; above "
+                "0.3 m the bearings alone leave the pose open)",
+                false, "", "DIR", cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
                 return rc;
+            if (argTrackFromTruth.isSet())
+            {
+                if (argRooms.isSet())
+                    throw std::invalid_argument("--track-from-truth runs no room: no --rooms");
+                return reportTrackFromTruth(argTrackFromTruth.getValue());
+            }
             if (argRooms.getValue() == 0) throw std::invalid_argument("--rooms must be > 0");
             const bool evaluation = argEval.getValue();
             const uint32_t first = argFirst.isSet() ? argFirst.getValue()

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -96,6 +97,17 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     EXPECT_LE(number(room, "central_beyond30_unflagged"), number(room, "central_beyond30"))
         << r.output;
     EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
+    // The no-odometry track fitted from the true poses (its best case), in the CSV and again
+    // from the recorded room alone.
+    const double fromTruth = number(room, "noodo_track_from_truth_m");
+    EXPECT_TRUE(std::isfinite(fromTruth)) << r.output;
+    const auto again =
+        test::run(test::binDir() + "/localization-accuracy --track-from-truth " + tmp.file("work"));
+    ASSERT_EQ(again.exitCode, 0) << again.output;
+    std::ostringstream row;
+    row << "| 7 | " << std::fixed << std::setprecision(2) << fromTruth << " |";
+    EXPECT_NE(again.output.find(row.str()), std::string::npos) << again.output;
+    EXPECT_NE(again.output.find("within 0.3 m: "), std::string::npos) << again.output;
 }
 
 TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
@@ -116,4 +128,14 @@ TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
     EXPECT_NE(chain.exitCode, 0);
     EXPECT_NE(chain.output.find("--live-chain"), std::string::npos) << chain.output;
     EXPECT_FALSE(std::filesystem::exists(tmp.file("work/room-1"))) << fewAps.output;
+    // Re-analysis of a folder that holds no room, and with a room count, names the option.
+    const auto noRooms = test::run(
+        test::binDir() + "/localization-accuracy --track-from-truth " + tmp.file("nothing"));
+    EXPECT_NE(noRooms.exitCode, 0);
+    EXPECT_NE(noRooms.output.find("--track-from-truth"), std::string::npos) << noRooms.output;
+    EXPECT_NE(noRooms.output.find(tmp.file("nothing")), std::string::npos) << noRooms.output;
+    const auto both = test::run(
+        test::binDir() + "/localization-accuracy --rooms 1 --track-from-truth " + tmp.file("w"));
+    EXPECT_NE(both.exitCode, 0);
+    EXPECT_NE(both.output.find("--rooms"), std::string::npos) << both.output;
 }

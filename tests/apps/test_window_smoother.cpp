@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "SyntheticWorld.h"
+#include "TrackFromTruth.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -356,4 +357,35 @@ TEST(WindowSmoother, WithoutOdometryResumesWhereTheRobotStoppedToTurn)
     EXPECT_LT(shipped, 0.3);
     EXPECT_GT(refined, 500u);        // of about 1500 bearings from then on
     EXPECT_GT(fromFilterOnly, 1.0);  // what the restart pose is for
+}
+
+TEST(TrackFromTruth, SaysWhereTheBearingsAloneLeaveThePoseOpen)
+{
+    // The evaluator's best case of the no-odometry track (localization-accuracy
+    // --track-from-truth): with four APs in the corners the bearings pin the robot down; with
+    // the four APs 0.4 m apart in one corner they give one direction and the robot's heading is
+    // unknown, so its range along that direction is open (the information limit, not search).
+    WorldOptions o;
+    o.duration_s = 40;
+    o.loop = {{2, 2}, {8, 2.5}, {7, 6}, {2, 5.5}};
+    o.aod = false;
+    o.rate_Hz = 10;
+    WindowSmootherOptions options;
+    options.track.forwardOnly = true;
+    options.graph.useAod = false;
+    const mrpt::math::TBoundingBox area({0, 0, 0}, {10, 8, 0});
+
+    const auto corners = makeWorld(roomAps(), o);
+    const auto spread = trackFromTruth(corners.bearings, corners.aps, corners.truth, options, area);
+    EXPECT_GE(spread.newestErrors_m.size(), 35u);  // every second from 5 s on
+    EXPECT_LT(spread.median_m, 0.15);
+
+    const auto clustered = makeWorld(
+        makeAps({{0.3, 0.3, 0.785}, {0.7, 0.3, 0.785}, {0.3, 0.7, 0.785}, {0.7, 0.7, 0.785}}), o);
+    const auto open =
+        trackFromTruth(clustered.bearings, clustered.aps, clustered.truth, options, area);
+    EXPECT_GT(open.median_m, 0.5);
+    EXPECT_GT(open.median_m, 4 * spread.median_m);
+    std::cout << "track from the true poses: " << spread.median_m << " m (APs in the corners), "
+              << open.median_m << " m (APs in one corner)\n";
 }
