@@ -85,6 +85,10 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     if (std::isfinite(number(room, "live_odo_median_m")))
     {
         EXPECT_GE(number(room, "live_odo_inside95_after"), 0.5) << r.output;
+        // Within 3σ (Mahalanobis distance 3) holds every error inside the 95 % ellipse (2.45).
+        EXPECT_GE(
+            number(room, "live_odo_inside3sigma_after"), number(room, "live_odo_inside95_after"))
+            << r.output;
     }
     EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "reduction_estimated"))) << r.output;

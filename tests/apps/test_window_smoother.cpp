@@ -74,6 +74,17 @@ Replay replay(
     return r;
 }
 
+/** A skewed loop in roomAps()'s room, AoA only at 10 bearings/s per AP. */
+WorldOptions loopWithoutAod(double duration_s)
+{
+    WorldOptions o;
+    o.duration_s = duration_s;
+    o.loop = {{2, 2}, {8, 2.5}, {7, 6}, {2, 5.5}};
+    o.aod = false;
+    o.rate_Hz = 10;
+    return o;
+}
+
 double median(std::vector<double> v)
 {
     std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
@@ -317,11 +328,7 @@ TEST(WindowSmoother, WithoutOdometryResumesWhereTheRobotStoppedToTurn)
     // The robot stands at each corner and turns on the spot (by 80-101 deg) for about 2 s, its
     // bearings wide meanwhile; the filter, its constant-velocity guess driving on, is lost from
     // the first corner on (it carries straight on along the first side).
-    WorldOptions o;
-    o.duration_s = 60;
-    o.loop = {{2, 2}, {8, 2.5}, {7, 6}, {2, 5.5}};
-    o.aod = false;
-    o.rate_Hz = 10;
+    WorldOptions o = loopWithoutAod(60);
     o.cornerTurnRate = M_PI / 4;
     const auto w = makeWorld(roomAps(), o);
     const auto &start = o.loop[0], &corner = o.loop[1];
@@ -365,11 +372,7 @@ TEST(TrackFromTruth, SaysWhereTheBearingsAloneLeaveThePoseOpen)
     // --track-from-truth): with four APs in the corners the bearings pin the robot down; with
     // the four APs 0.4 m apart in one corner they give one direction and the robot's heading is
     // unknown, so its range along that direction is open (the information limit, not search).
-    WorldOptions o;
-    o.duration_s = 40;
-    o.loop = {{2, 2}, {8, 2.5}, {7, 6}, {2, 5.5}};
-    o.aod = false;
-    o.rate_Hz = 10;
+    const WorldOptions o = loopWithoutAod(40);
     WindowSmootherOptions options;
     options.track.forwardOnly = true;
     options.graph.useAod = false;
