@@ -1097,9 +1097,7 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
     std::cout << "| room | size [m] | odo scale / yaw drift | kidnapped offline odo / none [m] "
                  "| converge [s] | live odo / none [m] | worst after conv. [m] (off odo / none) "
                  "| no-odo track from true poses [m] | live in 95 % / 3σ, odo; none | ATE odo [m] "
-                 "| drift red. known / est. (est. "
-                 "without scale) | device median [m] "
-                 "/ in 95 % "
+                 "| drift red. known / est. (est. without scale) | device median [m] / in 95 % "
                  "| bearings >30° (also beyond 3σ) |\n"
                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : rooms)
