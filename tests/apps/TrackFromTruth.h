@@ -12,7 +12,7 @@
 #include <mrpt_wifi/localization/Trajectory2D.h>
 #include <mrpt_wifi/localization/WindowSmoother.h>
 
-#include <algorithm>
+#include <algorithm>  // std::max
 #include <cmath>
 #include <optional>
 #include <stdexcept>
@@ -22,7 +22,6 @@ namespace mrpt_wifi::loctest
 {
 struct TrackFromTruth
 {
-    std::vector<double> times;           //!< the solves' newest node times
     std::vector<double> newestErrors_m;  //!< error of each solve's newest node (the estimate)
     double median_m = NAN;               //!< NaN when no window could be solved
 };
@@ -67,15 +66,9 @@ inline TrackFromTruth trackFromTruth(
         mrpt::math::TPose2D g;
         if (!truth.interpolate(r.poses.t.back(), g)) continue;
         const auto& p = r.poses.poses.back();
-        out.times.push_back(r.poses.t.back());
         out.newestErrors_m.push_back(std::hypot(p.x - g.x, p.y - g.y));
     }
-    if (!out.newestErrors_m.empty())
-    {
-        auto e = out.newestErrors_m;
-        std::nth_element(e.begin(), e.begin() + long(e.size() / 2), e.end());
-        out.median_m = e[e.size() / 2];
-    }
+    if (!out.newestErrors_m.empty()) out.median_m = computeStats(out.newestErrors_m).median;
     return out;
 }
 

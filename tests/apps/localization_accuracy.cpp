@@ -1047,12 +1047,10 @@ int reportTrackFromTruth(const fs::path& work)
         try
         {
             const auto t = trackFromTruthOfRoom(dir);
-            auto e = t.newestErrors_m;
-            std::sort(e.begin(), e.end());
-            const double p90 = e.empty() ? NAN : e[std::min(e.size() - 1, e.size() * 9 / 10)];
-            std::cout << "| " << seed << " | " << fmt(t.median_m) << " | " << fmt(p90) << " | "
-                      << e.size() << " |\n";
-            if (!e.empty()) ++solved;
+            const auto stats = computeStats(t.newestErrors_m);
+            std::cout << "| " << seed << " | " << fmt(t.median_m) << " | "
+                      << fmt(stats.count ? stats.p90 : NAN) << " | " << stats.count << " |\n";
+            if (stats.count) ++solved;
             if (t.median_m <= 0.3) ++within;
         }
         catch (const std::exception& ex)
