@@ -18,6 +18,7 @@
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/core/bits_math.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
@@ -68,6 +69,10 @@ struct Options
     /** Who computes the live bearings: wifi-localize's own chain ("app") or the CSI sensor's
      *  (`bearing_*` keys in its section, "sensor"); the same estimator, calibration and arrays. */
     std::string liveChain = "app";
+    int apStreams = 0;  //!< sim::RandomRoomOptions::accessPointStreams (0: drawn, 2 or 4)
+    /** AoD too: the APs' transmit chains calibrated as a user would (calibrateTransmitChains)
+     *  and used by every estimator (needs apStreams 2 or 4). */
+    bool aod = false;
     double convergedThreshold_m = 1.0, convergedHold_s = 5.0;  // the apps' defaults
 };
 
@@ -376,8 +381,15 @@ void apGeometry(Room& room)
 
 /** Simulates a drive of the room and runs csi-bearings on it: truth in DIR/truth, bearings in
  *  DIR/bearings.csv; the rawlog is removed afterwards. */
+/** The APs' transmit array (every AP's with --ap-streams; the two-stream APs' otherwise). */
+std::string apArray(const Options& o)
+{
+    return kShare + "/arrays/ap-linear-" + (o.apStreams == 4 ? "4" : "2") + ".yaml";
+}
+
 bool simulateAndEstimate(
-    const std::string& scenarioYaml, const fs::path& dir, const fs::path& calib, Room& room)
+    const std::string& scenarioYaml, const fs::path& dir, const fs::path& calib, Room& room,
+    const Options& o)
 {
     fs::create_directories(dir);
     std::ofstream(dir / "scenario.yaml") << scenarioYaml;
@@ -390,7 +402,8 @@ bool simulateAndEstimate(
         return false;
     const bool ok = runOrThrow(
                         bin("csi-bearings") + " " + rawlog + " /dev/null --calib " +
-                            calib.string() + " --csv " + (dir / "bearings.csv").string() + " -q",
+                            calib.string() + " --csv " + (dir / "bearings.csv").string() +
+                            (o.aod ? " --tx-array " + apArray(o) : "") + " -q",
                         room, "csi-bearings")
                         .exitCode == 0;
     fs::remove(rawlog);
@@ -485,7 +498,7 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
             {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
              (dir / "kidnapped" / "truth" / "transmitters.yaml").string()},
             {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aoa", "true"},
-            {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aod", "false"},
+            {"MetricMap_wifiBearingMap_00_likelihoodOpts/use_aod", o.aod ? "true" : "false"},
             {"LocalizationExperiment/particles_count", std::to_string(o.particles)},
             {"LocalizationExperiment/init_PDF_max_x", fmt(room.width, 3)},
             {"LocalizationExperiment/init_PDF_max_y", fmt(room.depth, 3)},
@@ -498,7 +511,7 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
             keys[section + "/bearing_algorithm"] = "default";
             keys[section + "/bearing_calibration"] = calib.string();
             keys[section + "/bearing_array"] = kShare + "/arrays/rt-ac86u.yaml";
-            keys[section + "/" + txKey] = kShare + "/arrays/ap-linear-2.yaml";
+            keys[section + "/" + txKey] = apArray(o);
         };
         configureChain("wifi-localize", "bearing_tx_array");
         if (o.liveChain == "sensor") configureChain("WIFI_CSI", "bearing_tx_arrays");
@@ -647,6 +660,39 @@ void guarded(Room& room, const std::string& what, const std::function<void()>& r
     }
 }
 
+constexpr double kApCalibration_s = 60;  //!< the AP calibration drive (the loop's first part)
+
+/** The APs' transmit chains calibrated as a user would: wifi-calibrate --transmit-chains on the
+ *  first kApCalibration_s of the room's loop drive with its odometry (started where the loop
+ *  starts), written beside the receiver's calibration (`calib/transmitters`). The receiver's own
+ *  calibration stays the simulator's truth. */
+void calibrateTransmitChains(
+    Room& room, const fs::path& dir, const std::string& loopYaml, const fs::path& calib)
+{
+    const fs::path cd = dir / "ap-calibration";
+    fs::create_directories(cd);
+    std::ofstream(cd / "scenario.yaml") << loopYaml;
+    const auto rawlog = (cd / "drive.rawlog").string();
+    const auto start = sim::Scenario::fromYamlText(loopYaml, "room", ".").motion.start;
+    if (runOrThrow(
+            bin("wifi-sim") + " " + (cd / "scenario.yaml").string() + " " + rawlog + " -q -d " +
+                fmt(kApCalibration_s, 0) + " -t " + (cd / "truth").string(),
+            room, "wifi-sim (AP calibration drive)")
+            .exitCode == 0)
+        runOrThrow(
+            bin("wifi-calibrate") + " " + rawlog + " --array " + kShare +
+                "/arrays/rt-ac86u.yaml --transmitters " +
+                (cd / "truth" / "transmitters.yaml").string() + " --poses odometry --odom-origin " +
+                fmt(start.x, 3) + " " + fmt(start.y, 3) + " " + fmt(mrpt::RAD2DEG(start.phi), 2) +
+                " --transmit-chains --force -q --out " + (cd / "out").string(),
+            room, "wifi-calibrate --transmit-chains");
+    fs::remove(rawlog);
+    if (fs::exists(cd / "out" / "transmitters"))
+        fs::copy(
+            cd / "out" / "transmitters", calib / "transmitters",
+            fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+}
+
 Room evaluateRoom(uint32_t seed, const Options& o)
 {
     const auto wall0 = std::chrono::steady_clock::now();
@@ -663,6 +709,7 @@ Room evaluateRoom(uint32_t seed, const Options& o)
     ro.odometryScaleError = room.scaleError;
     ro.odometryYawScaleError = room.yawScaleError;
     ro.odometryYawDrift_deg_per_m = room.yawDrift_deg_per_m;
+    ro.accessPointStreams = o.apStreams;
     const std::string kidnappedYaml = sim::randomRoomYaml(seed, ro);
     ro.loopLaps = o.laps;
     const std::string loopYaml = sim::randomRoomYaml(seed, ro);
@@ -684,10 +731,18 @@ Room evaluateRoom(uint32_t seed, const Options& o)
         cal.saveYamlFile(PhaseCalibration::pathFor(calib.string(), rx.name, cal.chanspec));
     }
     const AntennaArray rx = test::fromSimArray(sc.receiver.array);
+    if (o.aod)
+    {
+        std::cerr << "[room " << seed << "] AP calibration drive" << std::flush;
+        guarded(
+            room, "transmit-chain calibration",
+            [&] { calibrateTransmitChains(room, dir, loopYaml, calib); });
+        std::cerr << "\n";
+    }
 
     std::vector<test::ErrorRecord> bearingErrors;
     std::cerr << "[room " << seed << "] kidnapped drive" << std::flush;
-    if (simulateAndEstimate(kidnappedYaml, dir / "kidnapped", calib, room))
+    if (simulateAndEstimate(kidnappedYaml, dir / "kidnapped", calib, room, o))
     {
         room.kidnappedTruth =
             Trajectory2D::fromTumFile((dir / "kidnapped/truth/trajectory_tum.txt").string());
@@ -707,7 +762,7 @@ Room evaluateRoom(uint32_t seed, const Options& o)
     }
     const size_t kidnappedBearings = bearingErrors.size();
     std::cerr << ", loop drive" << std::flush;
-    if (simulateAndEstimate(loopYaml, dir / "loop", calib, room))
+    if (simulateAndEstimate(loopYaml, dir / "loop", calib, room, o))
     {
         room.loopTruth =
             Trajectory2D::fromTumFile((dir / "loop/truth/trajectory_tum.txt").string());
@@ -1087,6 +1142,13 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
                  "true pose). "
                  "Access points per room: "
               << o.accessPoints
+              << (o.apStreams
+                      ? ", each sending " + std::to_string(o.apStreams) + " streams from a " +
+                            std::to_string(o.apStreams) + "-antenna line"
+                      : "")
+              << (o.aod ? "; AoA and AoD used, the APs' transmit chains calibrated by "
+                          "wifi-calibrate on the first 60 s of the loop drive with its odometry"
+                        : "; AoA used")
               << ". Bearings: csi-bearings `default` with the true receiver offsets, both drives "
                  "pooled (the random drive and the loop apart in parentheses); live, the same "
                  "chain run by "
@@ -1222,6 +1284,17 @@ int main(int argc, char** argv)
                 "", "aps",
                 "Access points per room (the first three are the seed's whatever the count)", false,
                 3, "N", cmd);
+            TCLAP::ValueArg<int> argApStreams(
+                "", "ap-streams",
+                "Streams every AP sends, from a line of as many antennas (ap-linear-N.yaml): 2 or "
+                "4; default: one or two, drawn per AP (the rooms and drives stay the seed's)",
+                false, 0, "N", cmd);
+            TCLAP::SwitchArg argAod(
+                "", "aod",
+                "AoD as well as AoA in every estimator, the APs' transmit chains calibrated by "
+                "wifi-calibrate --transmit-chains on the first 60 s of the loop drive with its "
+                "odometry (needs --ap-streams)",
+                cmd);
             TCLAP::ValueArg<std::string> argTrackFromTruth(
                 "", "track-from-truth",
                 "Run no room: for each room-N folder of an earlier --work DIR, the window "
@@ -1257,6 +1330,12 @@ int main(int argc, char** argv)
             o.live = !argNoLive.getValue();
             o.liveChain = argLiveChain.getValue();
             o.accessPoints = argAps.getValue();
+            o.apStreams = argApStreams.getValue();
+            o.aod = argAod.getValue();
+            if (o.apStreams != 0 && o.apStreams != 2 && o.apStreams != 4)
+                throw std::invalid_argument("--ap-streams: 2 or 4");
+            if (o.aod && o.apStreams == 0)
+                throw std::invalid_argument("--aod needs --ap-streams 2 or 4 (every AP an array)");
             if (o.accessPoints < 3) throw std::invalid_argument("--aps >= 3");
             if (!(o.kidnappedDuration_s >= 10)) throw std::invalid_argument("--duration >= 10 s");
             if (o.laps < 2) throw std::invalid_argument("--laps >= 2 (revisits)");

@@ -4,6 +4,7 @@
  * The full sweep is a command (share/localization/README.md, "Per-room evaluation"). */
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -114,6 +115,57 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     EXPECT_NE(again.output.find("within 0.3 m: "), std::string::npos) << again.output;
 }
 
+TEST(LocalizationAccuracy, WithAodCalibratesEveryApAndUsesItsAod)
+{
+    // --ap-streams 4 --aod: every AP a 4-antenna line, its transmit chains calibrated from the
+    // loop drive's odometry (wifi-calibrate), AoD in the offline, live and graph-SLAM bearings.
+    test::TempDir tmp;
+    const auto r = test::run(
+        test::binDir() +
+        "/localization-accuracy --rooms 1 --first-seed 7 -d 20 --laps 2 -n 1000 --ap-streams 4 "
+        "--aod -w " +
+        tmp.file("work"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("4-antenna line"), std::string::npos) << r.output;
+    const auto rows = readRoomsCsv(tmp.file("work/rooms.csv"));
+    ASSERT_EQ(rows.size(), 1u);
+    const auto& room = rows.front();
+    EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
+    // One calibration per AP, beside the receiver's.
+    size_t calibrated = 0;
+    for (const auto& e :
+         std::filesystem::directory_iterator(tmp.file("work/room-7/calib/transmitters")))
+        calibrated += e.is_directory();
+    EXPECT_EQ(calibrated, 3u);
+    // Every AP's bearings carry AoD.
+    std::istringstream csv(test::readFile(tmp.file("work/room-7/kidnapped/bearings.csv")));
+    std::string line;
+    std::getline(csv, line);
+    std::vector<std::string> header;
+    for (std::istringstream h(line); std::getline(h, header.emplace_back(), ',');)
+        ;
+    const auto col = [&](const std::string& name)
+    { return size_t(std::find(header.begin(), header.end(), name) - header.begin()); };
+    const size_t tx = col("transmitter"), hasAod = col("has_aod");
+    ASSERT_LT(std::max(tx, hasAod), header.size()) << line;
+    std::map<std::string, size_t> withAod;
+    while (std::getline(csv, line))
+    {
+        std::vector<std::string> c;
+        for (std::istringstream l(line); std::getline(l, c.emplace_back(), ',');)
+            ;
+        if (c.size() > hasAod && c[hasAod] == "1") ++withAod[c[tx]];
+    }
+    EXPECT_EQ(withAod.size(), 3u);
+    for (const auto& [mac, n] : withAod) EXPECT_GT(n, 100u) << mac;
+    EXPECT_NE(
+        test::readFile(tmp.file("work/room-7/live-odometry.ini")).find("use_aod = true"),
+        std::string::npos);
+    EXPECT_LE(number(room, "offline_odo_median_m"), 1.0) << r.output;
+    EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
+    EXPECT_GE(number(room, "reduction_known"), 0.3) << r.output;
+}
+
 TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
 {
     test::TempDir tmp;
@@ -142,4 +194,12 @@ TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
         test::binDir() + "/localization-accuracy --rooms 1 --track-from-truth " + tmp.file("w"));
     EXPECT_NE(both.exitCode, 0);
     EXPECT_NE(both.output.find("--rooms"), std::string::npos) << both.output;
+    for (const char* args : {"--ap-streams 3", "--aod"})
+    {
+        const auto bad = test::run(
+            test::binDir() + "/localization-accuracy --rooms 1 " + args + " -w " +
+            tmp.file("work"));
+        EXPECT_NE(bad.exitCode, 0) << args;
+        EXPECT_NE(bad.output.find(std::string(args).substr(0, 6)), std::string::npos) << bad.output;
+    }
 }

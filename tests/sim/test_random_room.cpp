@@ -142,3 +142,28 @@ TEST(RandomRoom, MoreAccessPointsKeepTheSeedsRoomAndDrive)
     two.accessPoints = 2;
     EXPECT_THROW(randomRoomYaml(5, two), std::invalid_argument);
 }
+
+TEST(RandomRoom, FourStreamsGiveEveryAccessPointAnArrayAndKeepTheRoom)
+{
+    RandomRoomOptions drawn = options(), four = options();
+    drawn.accessPoints = four.accessPoints = 4;
+    four.accessPointStreams = 4;
+    for (uint32_t seed : {5u, 14u})
+    {
+        const Scenario a = randomRoomScenario(seed, drawn), b = randomRoomScenario(seed, four);
+        ASSERT_EQ(b.transmitters.size(), a.transmitters.size());
+        for (size_t t = 0; t < a.transmitters.size(); ++t)
+        {
+            EXPECT_EQ(b.transmitters[t].streams, 4u);
+            EXPECT_EQ(b.transmitters[t].array.size(), 4u);
+            EXPECT_LE(a.transmitters[t].streams, 2u);
+            EXPECT_DOUBLE_EQ(b.transmitters[t].pose.x, a.transmitters[t].pose.x);
+            EXPECT_DOUBLE_EQ(b.transmitters[t].pose.phi, a.transmitters[t].pose.phi);
+        }
+        EXPECT_DOUBLE_EQ(b.motion.start.x, a.motion.start.x);
+        EXPECT_DOUBLE_EQ(b.motion.speed_mps, a.motion.speed_mps);
+    }
+    RandomRoomOptions three = options();
+    three.accessPointStreams = 3;
+    EXPECT_THROW(randomRoomYaml(5, three), std::invalid_argument);
+}

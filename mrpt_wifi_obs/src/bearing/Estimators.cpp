@@ -179,10 +179,12 @@ protected:
     }
 
     /** Distance between two bearings, up to the mirror of a linear array. */
-    double foldedDistance(double a, double b) const
+    double foldedDistance(double a, double b) const { return foldedDistanceOn(rx_, grid_, a, b); }
+    static double foldedDistanceOn(
+        const AntennaArray& array, const AngleGrid& grid, double a, double b)
     {
         const double d = angleDistance(a, b);
-        return grid_.circular ? d : std::min(d, angleDistance(rx_.mirrorOf(a), b));
+        return grid.circular ? d : std::min(d, angleDistance(array.mirrorOf(a), b));
     }
 
     /** How far the window's CSI also supports other directions: every local maximum of the
@@ -196,20 +198,29 @@ protected:
      *  a clean path stays sharp. Constants chosen on the development rooms only. */
     double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R, double quality)
     {
+        return ambiguityStdOn(
+            rx_, grid_, qf_, fastGroupedForm(theta, R), theta, R, quality, ambSpec_);
+    }
+    /** The same on any array (the transmitter's for AoD): `powerAtTheta` is the grouped
+     *  Bartlett power of `theta` on `R`, `spectrum` scratch space for qf's scan. */
+    double ambiguityStdOn(
+        const AntennaArray& array, const AngleGrid& grid, QuadraticFormGrid& qf,
+        double powerAtTheta, double theta, const std::vector<Eigen::MatrixXcd>& R, double quality,
+        Eigen::VectorXd& spectrum) const
+    {
         constexpr double kMargin = 0.5, kAmbiguityScale = 0.5;
-        qf_.evaluate(R, ambSpec_);
-        const double pTheta = fastGroupedForm(theta, R);
-        const double pMax = std::max(ambSpec_.maxCoeff(), pTheta);
+        qf.evaluate(R, spectrum);
+        const double pMax = std::max(spectrum.maxCoeff(), powerAtTheta);
         if (!(pMax > 0)) return 0;
-        const double beam = beamwidth();
+        const double beam = beamwidthOf(array);
         const double spread =
             std::max(kMargin * 2 * std::sqrt(std::clamp(1 - quality, 0.0, 1.0)), 1e-3);
         double sigma = 0;
-        for (size_t i : findPeaks1D(ambSpec_, grid_.circular, 6))
+        for (size_t i : findPeaks1D(spectrum, grid.circular, 6))
         {
-            const double d = foldedDistance(theta, grid_.angles[i]);
+            const double d = foldedDistanceOn(array, grid, theta, grid.angles[i]);
             if (d < beam) continue;
-            const double rho = ambSpec_[Eigen::Index(i)] / pMax;
+            const double rho = spectrum[Eigen::Index(i)] / pMax;
             const double w = std::clamp(1 - (1 - rho) / spread, 0.0, 1.0);
             sigma = std::max(sigma, kAmbiguityScale * d * w);
         }
@@ -217,14 +228,95 @@ protected:
     }
 
     /** Half-power beamwidth of the receive array at the band centre [rad]. */
-    double beamwidth() const
+    double beamwidth() const { return beamwidthOf(rx_); }
+    double beamwidthOf(const AntennaArray& array) const
     {
         double aperture = 0;
-        for (size_t i = 0; i < rx_.size(); ++i)
-            for (size_t j = i + 1; j < rx_.size(); ++j)
-                aperture = std::max(aperture, (rx_.elements[i] - rx_.elements[j]).norm());
+        for (size_t i = 0; i < array.size(); ++i)
+            for (size_t j = i + 1; j < array.size(); ++j)
+                aperture = std::max(aperture, (array.elements[i] - array.elements[j]).norm());
         const double fc = layout_ ? layout_->centerFrequency_Hz : 5.5e9;
         return aperture > 0 ? std::min(0.886 * kSpeedOfLightMps / fc / aperture, M_PI) : M_PI;
+    }
+
+    /** AoD: the transmitter's streams leave from its array elements, so the covariance across
+     *  streams (over receive antennas and subcarriers) is a transmit-side spatial covariance,
+     *  scanned with the transmitter's array geometry (Bartlett or MUSIC, `aod_method`). Leaves
+     *  `r` without AoD when the transmitter's array is unknown or it sent a single stream. */
+    void estimateAod(
+        const std::vector<const CleanCsi*>& frames, const EstimatorContext& ctx, BearingResult& r)
+    {
+        const CleanCsi& f = *frames.back();
+        const AntennaArray* txArray = ctx.txArrayOf ? ctx.txArrayOf(f.transmitter) : nullptr;
+        if (!txArray || f.nTx < 2) return;
+        for (uint8_t s : f.streamIndex)
+            if (s >= txArray->size())
+                throw std::invalid_argument(
+                    "aod: transmitter " + f.transmitter.asString() + " sends stream " +
+                    std::to_string(s) + " but its array '" + txArray->name + "' has " +
+                    std::to_string(txArray->size()) + " elements");
+        const auto txKey = std::make_tuple(txArray, f.streamIndex, f.layout.get());
+        if (!(txPrepared_ && txKey == txKey_))
+        {
+            tx_ = AntennaArray();
+            tx_.name = txArray->name;
+            for (uint8_t s : f.streamIndex) tx_.elements.push_back(txArray->elements[s]);
+            txGrid_ = AngleGrid::make(tx_, tx_.size(), opts_.angleBins);
+            txQf_.prepare(tx_, tx_.size(), txGrid_, gf_);
+            txKey_ = txKey;
+            txPrepared_ = true;
+        }
+        sumCovariances(frames, opts_.frequencyGroups, true, Rt_);
+        const size_t nT = tx_.size();
+        double aod;
+        if (opts_.aodMethod == "music")
+        {
+            Eigen::MatrixXcd total = Rt_[0];
+            for (size_t g = 1; g < Rt_.size(); ++g) total += Rt_[g];
+            Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> es(total, Eigen::EigenvaluesOnly);
+            const unsigned K =
+                signalDimension(es.eigenvalues(), opts_.subspaceThreshold, opts_.maxPaths);
+            noiseProjectors(Rt_, K, Pt_);
+            txQf_.evaluate(Pt_, txSpec_);
+            txSpec_ = txSpec_.cwiseMax(1e-12).cwiseInverse();
+            double bestPower = -1;
+            aod = 0;
+            for (size_t p : findPeaks1D(txSpec_, txGrid_.circular, K))
+            {
+                double t = txGrid_.at(refinePeak1D(txSpec_, p, txGrid_.circular));
+                if (opts_.refine)
+                    t = goldenMaximize(
+                        [&](double x) { return -groupedForm(tx_, nT, x, gf_, Pt_); },
+                        t - txGrid_.step, t + txGrid_.step, 28);
+                const double power = groupedForm(tx_, nT, t, gf_, Rt_);
+                if (power > bestPower)
+                {
+                    bestPower = power;
+                    aod = t;
+                }
+            }
+        }
+        else
+        {
+            txQf_.evaluate(Rt_, txSpec_);
+            Eigen::Index b;
+            txSpec_.maxCoeff(&b);
+            aod = txGrid_.at(refinePeak1D(txSpec_, size_t(b), txGrid_.circular));
+            if (opts_.refine)
+                aod = goldenMaximize(
+                    [&](double x) { return groupedForm(tx_, nT, x, gf_, Rt_); }, aod - txGrid_.step,
+                    aod + txGrid_.step, 28);
+        }
+        const double power = groupedForm(tx_, nT, aod, gf_, Rt_);
+        const double q = bartlettQuality(power, Rt_, nT);
+        double rxSnapshots = 0;
+        for (const auto* fr : frames) rxSnapshots += fr->nRx;
+        const double sd = bearingStd(
+            tx_, nT, aod, Rt_, gf_, gc_, rxSnapshots, q, opts_.stdFloor_deg * M_PI / 180);
+        // As AoA's σ, widened by what the same CSI also supports: near endfire a 4 × 26 mm
+        // AP line aliases the other endfire, and a confident wrong AoD pulls every pose.
+        const double amb = ambiguityStdOn(tx_, txGrid_, txQf_, power, aod, Rt_, q, txSpec_);
+        setAod(r, tx_, aod, std::min(std::hypot(sd, amb), M_PI / 2));
     }
 
     void keep1D(const Eigen::VectorXd& spectrum, const std::string& label, double peak)
@@ -252,6 +344,13 @@ protected:
     std::shared_ptr<const SubcarrierLayout> layout_;
     std::vector<Eigen::MatrixXcd> R_, Rd_;
     Eigen::VectorXd spec_, ambSpec_;
+    bool txPrepared_ = false;
+    std::tuple<const AntennaArray*, std::vector<uint8_t>, const SubcarrierLayout*> txKey_;
+    AntennaArray tx_;
+    AngleGrid txGrid_;
+    QuadraticFormGrid txQf_;
+    std::vector<Eigen::MatrixXcd> Rt_, Pt_;
+    Eigen::VectorXd txSpec_;
 };
 
 // =============================================================================================
@@ -727,7 +826,8 @@ protected:
  *  strongest one's power, the earliest delay is the direct path; peaks within 5 ns of it, which
  *  the band can't separate, go to the strongest), the bearing polished with per-sub-band
  *  wavelengths on the CSI matched to that delay, and a σ that includes what the same delay
- *  also supports (the other endfire, a path the band can't separate). */
+ *  also supports (the other endfire, a path the band can't separate). AoD as the aod
+ *  estimator's, when the transmitter sends several streams and its array is known. */
 class DefaultEstimator : public ProfileEstimator
 {
 public:
@@ -739,11 +839,12 @@ public:
     std::string name() const override { return "default"; }
     std::string description() const override
     {
-        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma";
+        return "recommended: 8-frame angle x delay profile, earliest strong path, honest sigma "
+               "(+ AoD of a multi-stream transmitter with a known array)";
     }
     std::vector<std::string> parameterKeys() const override
     {
-        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio"});
+        return plus(plus(kCommon1D, kProfileKeys), {"direct_path_power_ratio", "aod_method"});
     }
 
     bool estimate(
@@ -816,6 +917,7 @@ public:
         r.pathsDetected = unsigned(cands.size());
         keep2D(P, "Bartlett power", r.aoa_rad, chosen.delay);
         if (hasProfile_) profile_.peakAngle_rad = theta;
+        estimateAod(frames, ctx, r);
         return true;
     }
 
@@ -825,10 +927,7 @@ private:
 };
 
 // =============================================================================================
-/** (6) AoD: the transmitter's streams leave from its array elements, so the covariance across
- *  streams (over receive antennas and subcarriers) is a transmit-side spatial covariance; scanned
- *  with the transmitter's array geometry (Bartlett or MUSIC). AoA comes from the receive side as
- *  in aoa_only. */
+/** (6) AoD (EstimatorBase::estimateAod) with the fast AoA of aoa_only. */
 class AodEstimator : public EstimatorBase
 {
 public:
@@ -859,85 +958,9 @@ public:
         r.pathsDetected = 1;
         keep1D(spec_, "Bartlett power (AoA)", theta);
 
-        // Transmit side.
-        const CleanCsi& f = *frames.back();
-        const AntennaArray* txArray = ctx.txArrayOf ? ctx.txArrayOf(f.transmitter) : nullptr;
-        if (!txArray || f.nTx < 2) return true;
-        for (uint8_t s : f.streamIndex)
-            if (s >= txArray->size())
-                throw std::invalid_argument(
-                    "aod: transmitter " + f.transmitter.asString() + " sends stream " +
-                    std::to_string(s) + " but its array '" + txArray->name + "' has " +
-                    std::to_string(txArray->size()) + " elements");
-        const auto txKey = std::make_tuple(txArray, f.streamIndex, f.layout.get());
-        if (!(txPrepared_ && txKey == txKey_))
-        {
-            tx_ = AntennaArray();
-            tx_.name = txArray->name;
-            for (uint8_t s : f.streamIndex) tx_.elements.push_back(txArray->elements[s]);
-            txGrid_ = AngleGrid::make(tx_, tx_.size(), opts_.angleBins);
-            txQf_.prepare(tx_, tx_.size(), txGrid_, gf_);
-            txKey_ = txKey;
-            txPrepared_ = true;
-        }
-        sumCovariances(frames, opts_.frequencyGroups, true, Rt_);
-        const size_t nT = tx_.size();
-        double aod;
-        if (opts_.aodMethod == "music")
-        {
-            Eigen::MatrixXcd total = Rt_[0];
-            for (size_t g = 1; g < Rt_.size(); ++g) total += Rt_[g];
-            Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd> es(total, Eigen::EigenvaluesOnly);
-            const unsigned K =
-                signalDimension(es.eigenvalues(), opts_.subspaceThreshold, opts_.maxPaths);
-            noiseProjectors(Rt_, K, Pt_);
-            txQf_.evaluate(Pt_, txSpec_);
-            txSpec_ = txSpec_.cwiseMax(1e-12).cwiseInverse();
-            double bestPower = -1;
-            aod = 0;
-            for (size_t p : findPeaks1D(txSpec_, txGrid_.circular, K))
-            {
-                double t = txGrid_.at(refinePeak1D(txSpec_, p, txGrid_.circular));
-                if (opts_.refine)
-                    t = goldenMaximize(
-                        [&](double x) { return -groupedForm(tx_, nT, x, gf_, Pt_); },
-                        t - txGrid_.step, t + txGrid_.step, 28);
-                const double power = groupedForm(tx_, nT, t, gf_, Rt_);
-                if (power > bestPower)
-                {
-                    bestPower = power;
-                    aod = t;
-                }
-            }
-        }
-        else
-        {
-            txQf_.evaluate(Rt_, txSpec_);
-            Eigen::Index b;
-            txSpec_.maxCoeff(&b);
-            aod = txGrid_.at(refinePeak1D(txSpec_, size_t(b), txGrid_.circular));
-            if (opts_.refine)
-                aod = goldenMaximize(
-                    [&](double x) { return groupedForm(tx_, nT, x, gf_, Rt_); }, aod - txGrid_.step,
-                    aod + txGrid_.step, 28);
-        }
-        const double q = bartlettQuality(groupedForm(tx_, nT, aod, gf_, Rt_), Rt_, nT);
-        double rxSnapshots = 0;
-        for (const auto* fr : frames) rxSnapshots += fr->nRx;
-        const double sd = bearingStd(
-            tx_, nT, aod, Rt_, gf_, gc_, rxSnapshots, q, opts_.stdFloor_deg * M_PI / 180);
-        setAod(r, tx_, aod, sd);
+        estimateAod(frames, ctx, r);
         return true;
     }
-
-private:
-    bool txPrepared_ = false;
-    std::tuple<const AntennaArray*, std::vector<uint8_t>, const SubcarrierLayout*> txKey_;
-    AntennaArray tx_;
-    AngleGrid txGrid_;
-    QuadraticFormGrid txQf_;
-    std::vector<Eigen::MatrixXcd> Rt_, Pt_;
-    Eigen::VectorXd txSpec_;
 };
 
 // =============================================================================================

@@ -63,6 +63,11 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
     if (options.accessPoints < 3 || options.accessPoints > 250)
         throw std::invalid_argument(
             "random room: " + std::to_string(options.accessPoints) + " access points (3 to 250)");
+    if (options.accessPointStreams != 0 && options.accessPointStreams != 2 &&
+        options.accessPointStreams != 4)
+        throw std::invalid_argument(
+            "random room: " + std::to_string(options.accessPointStreams) +
+            " streams per access point (0: drawn, 2 or 4)");
     const bool intel = options.receiver == "intel5300";
     // Uniform reals in [a, b) and integers in [a, b] drawn from a generator.
     const auto uniformFrom = [](mrpt::random::CRandomGenerator& g)
@@ -136,15 +141,19 @@ std::string randomRoomYaml(uint32_t seed, const RandomRoomOptions& options)
         if (wall == 1) p = {W - inset, uniform(0.5, H - 0.5)}, inward = 180;
         if (wall == 2) p = {uniform(0.5, W - 0.5), H - inset}, inward = -90;
         if (wall == 3) p = {inset, uniform(0.5, H - 0.5)}, inward = 0;
-        const bool two = uniform(0, 1) < 0.5;
+        const bool two = uniform(0, 1) < 0.5;  // drawn whatever the option: same stream
+        const int streams = options.accessPointStreams > 0 ? options.accessPointStreams
+                            : two                          ? 2
+                                                           : 1;
         y << "  - name: ap" << t << "\n"
           << "    mac: '02:00:00:00:0a:" << std::hex << std::setw(2) << std::setfill('0') << (t + 1)
           << std::dec << std::setfill(' ') << "'\n"
           << "    position: " << pt(p) << "\n"
           << "    yaw_deg: " << inward + uniform(-60, 60) << "\n"
           << "    channel: " << (intel ? "159/40" : "155/80") << "\n"
-          << "    streams: " << (two ? 2 : 1) << "\n";
-        if (two) y << "    array: " << options.arraysDir << "/ap-linear-2.yaml\n";
+          << "    streams: " << streams << "\n";
+        if (streams > 1)
+            y << "    array: " << options.arraysDir << "/ap-linear-" << streams << ".yaml\n";
         y << "    frame_rate_hz: 50\n";
     };
     y << "\ntransmitters:\n";

@@ -20,7 +20,7 @@ inline bool isEvaluationSeed(uint32_t seed)
 struct RandomRoomOptions
 {
     double duration_s = 60.0;
-    /** Folder holding rt-ac86u.yaml and ap-linear-2.yaml (share/arrays). */
+    /** Folder holding rt-ac86u.yaml and ap-linear-{2,4}.yaml (share/arrays). */
     std::string arraysDir;
     /** The receiver (its array file in arraysDir, channel of the APs, CSI format):
      *  "rt-ac86u" (155/80, every bin) or "intel5300" (intel5300-linear-3.yaml, 159/40, the 30
@@ -37,6 +37,10 @@ struct RandomRoomOptions
     /** Access points (≥ 3). Those beyond the third are drawn from a stream of their own, so a
      *  seed keeps its room, first three APs and drive whatever the count. */
     int accessPoints = 3;
+    /** Streams every AP sends: 0 draws one or two per AP (two from ap-linear-2.yaml); 2 or 4
+     *  gives every AP that many from ap-linear-2.yaml or ap-linear-4.yaml (AoD at every AP).
+     *  The draws are the same either way, so a seed keeps its room, APs and drive. */
+    int accessPointStreams = 0;
 };
 
 /** The receivers randomRoomYaml() knows ("rt-ac86u", "intel5300"). */
