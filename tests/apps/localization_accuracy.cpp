@@ -379,14 +379,14 @@ void apGeometry(Room& room)
             }
 }
 
-/** Simulates a drive of the room and runs csi-bearings on it: truth in DIR/truth, bearings in
- *  DIR/bearings.csv; the rawlog is removed afterwards. */
 /** The APs' transmit array (every AP's with --ap-streams; the two-stream APs' otherwise). */
 std::string apArray(const Options& o)
 {
     return kShare + "/arrays/ap-linear-" + (o.apStreams == 4 ? "4" : "2") + ".yaml";
 }
 
+/** Simulates a drive of the room and runs csi-bearings on it: truth in DIR/truth, bearings in
+ *  DIR/bearings.csv (AoD too with --aod); the rawlog is removed afterwards. */
 bool simulateAndEstimate(
     const std::string& scenarioYaml, const fs::path& dir, const fs::path& calib, Room& room,
     const Options& o)

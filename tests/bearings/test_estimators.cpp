@@ -42,6 +42,17 @@ BearingResult run(
     return r;
 }
 
+/** The rt-ac86u receiving 4 streams from a 4-antenna AP line (ap-linear-4) at 25 dB. */
+test::SyntheticSpec fourStreamsFromAnApLine()
+{
+    test::SyntheticSpec s;
+    s.rx = test::loadArray("rt-ac86u");
+    s.tx = test::loadArray("ap-linear-4");
+    s.streams = 4;
+    s.snr_dB = 25;
+    return s;
+}
+
 double resolvedError(const BearingResult& r, double truth)
 {
     double e = angleDistance(r.aoa_rad, truth);
@@ -224,11 +235,7 @@ TEST(BearingEstimators, SlidingWindowReusesPerFrameTermsWithoutChangingTheEstima
 
 TEST(BearingEstimators, AngleOfDepartureFromTheTransmitterStreams)
 {
-    test::SyntheticSpec s;
-    s.rx = test::loadArray("rt-ac86u");
-    s.tx = test::loadArray("ap-linear-4");
-    s.streams = 4;
-    s.snr_dB = 25;
+    test::SyntheticSpec s = fourStreamsFromAnApLine();
     for (double aod : {-50.0, -5.0, 30.0})
     {
         s.paths = {{20 * kDeg, aod * kDeg, 12e-9, {1, 0}}};
@@ -250,11 +257,7 @@ TEST(BearingEstimators, AngleOfDepartureFromTheTransmitterStreams)
 
 TEST(BearingEstimators, DefaultGivesAodAndItsSigmaCoversTheOtherEndfire)
 {
-    test::SyntheticSpec s;
-    s.rx = test::loadArray("rt-ac86u");
-    s.tx = test::loadArray("ap-linear-4");
-    s.streams = 4;
-    s.snr_dB = 25;
+    test::SyntheticSpec s = fourStreamsFromAnApLine();
     // Broadside: sharp, as the aod estimator's.
     s.paths = {{20 * kDeg, -5 * kDeg, 12e-9, {1, 0}}};
     const BearingResult broadside = run("default", s, 8);
