@@ -3,8 +3,8 @@
  * the offline and live filters, graph SLAM, device map), its figures within generous bounds.
  * The full sweep is a command (share/localization/README.md, "Per-room evaluation"). */
 #include <gtest/gtest.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
 
-#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -14,6 +14,7 @@
 #include "TestSupport.h"
 
 using namespace mrpt_wifi;
+using namespace mrpt_wifi::localization;
 
 namespace
 {
@@ -138,24 +139,10 @@ TEST(LocalizationAccuracy, WithAodCalibratesEveryApAndUsesItsAod)
         calibrated += e.is_directory();
     EXPECT_EQ(calibrated, 3u);
     // Every AP's bearings carry AoD.
-    std::istringstream csv(test::readFile(tmp.file("work/room-7/kidnapped/bearings.csv")));
-    std::string line;
-    std::getline(csv, line);
-    std::vector<std::string> header;
-    for (std::istringstream h(line); std::getline(h, header.emplace_back(), ',');)
-        ;
-    const auto col = [&](const std::string& name)
-    { return size_t(std::find(header.begin(), header.end(), name) - header.begin()); };
-    const size_t tx = col("transmitter"), hasAod = col("has_aod");
-    ASSERT_LT(std::max(tx, hasAod), header.size()) << line;
     std::map<std::string, size_t> withAod;
-    while (std::getline(csv, line))
-    {
-        std::vector<std::string> c;
-        for (std::istringstream l(line); std::getline(l, c.emplace_back(), ',');)
-            ;
-        if (c.size() > hasAod && c[hasAod] == "1") ++withAod[c[tx]];
-    }
+    for (const auto& b :
+         readBearingCsv(tmp.file("work/room-7/kidnapped/bearings.csv"), BearingCsvOptions()))
+        if (b.hasAod) ++withAod[b.transmitter.asString()];
     EXPECT_EQ(withAod.size(), 3u);
     for (const auto& [mac, n] : withAod) EXPECT_GT(n, 100u) << mac;
     EXPECT_NE(
