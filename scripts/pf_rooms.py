@@ -15,6 +15,13 @@ window smoother) against the true poses after convergence
 --aps N keeps only the room's first N access points (their bearings and map entries): on a sweep
 run with `localization-accuracy --aps 4` it gives the same rooms and drives with the seed's three
 APs, since the APs beyond the third come from a stream of their own.
+
+Without odometry (`none`) the bearings are kidnapped/bearings-no-odometry.csv, as the evaluator
+uses them: csi-bearings with the rawlog's odometry ignored (a robot without odometry has none for
+its bearing windows either). Sweeps made before the evaluator wrote that file get it here, once:
+the room's drive simulated again (wifi-sim is deterministic) and estimated with --no-odometry.
+--odometry-bearings takes kidnapped/bearings.csv instead (windows chosen with the odometry: how
+sweeps before 2026-11-27 ran without odometry).
 """
 import argparse
 import bisect
@@ -81,6 +88,37 @@ def keep_first_aps(truth_dir, bearings_csv, count, out):
     return aps, csv
 
 
+def no_odometry_bearings(build, room_dir):
+    """kidnapped/bearings-no-odometry.csv of a sweep's room, estimated from its drive if missing
+    (with the AP arrays when its bearings carry AoD, as the evaluator's --aod)."""
+    kidnapped = os.path.join(room_dir, "kidnapped")
+    csv = os.path.join(kidnapped, "bearings-no-odometry.csv")
+    if os.path.exists(csv):
+        return csv
+    with open(os.path.join(kidnapped, "bearings.csv")) as f:
+        header = f.readline().strip().split(",")
+        aod = any(row.split(",")[header.index("has_aod")] == "1" for row in f)
+    streams = re.findall(r"streams: (\d+)", open(os.path.join(kidnapped, "scenario.yaml")).read())
+    rawlog = os.path.join(kidnapped, "drive-no-odometry.rawlog")
+    truth = os.path.join(kidnapped, "truth-again")
+    share = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "share", "arrays")
+    try:
+        subprocess.run([os.path.join(build, "bin", "wifi-sim"), os.path.join(kidnapped, "scenario.yaml"),
+                        rawlog, "-q", "-t", truth], check=True, capture_output=True)
+        cmd = [os.path.join(build, "bin", "csi-bearings"), rawlog, "/dev/null", "--no-odometry",
+               "--calib", os.path.join(room_dir, "calib"), "--csv", csv + ".tmp", "-q"]
+        if aod:
+            cmd += ["--tx-array", os.path.join(share, f"ap-linear-{max(map(int, streams))}.yaml")]
+        subprocess.run(cmd, check=True, capture_output=True)
+        os.replace(csv + ".tmp", csv)
+    finally:
+        for leftover in (rawlog, csv + ".tmp"):
+            if os.path.exists(leftover):
+                os.remove(leftover)
+        subprocess.run(["rm", "-rf", truth])
+    return csv
+
+
 def read_tum(path):
     times, xy = [], []
     for line in open(path):
@@ -123,6 +161,8 @@ def main():
     p.add_argument("--rooms", default="")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--aps", type=int, default=0, help="keep the first N access points only")
+    p.add_argument("--odometry-bearings", action="store_true",
+                   help="without odometry, the bearings estimated with it (kidnapped/bearings.csv)")
     p.add_argument("overrides", nargs="*", help="Section/key=value")
     a = p.parse_intermixed_args()
     program = os.path.join(a.build, "bin", "wifi-pf-localization")
@@ -152,6 +192,8 @@ def main():
         truth = os.path.join(src, "kidnapped", "truth")
         aps = os.path.join(truth, "transmitters.yaml")
         bearings = os.path.join(src, "kidnapped", "bearings.csv")
+        if a.motion == "none" and not a.odometry_bearings:
+            bearings = os.path.join(src, "kidnapped", "bearings-no-odometry.csv")
         if a.aps:
             aps, bearings = keep_first_aps(truth, bearings, a.aps, out)
         cmd = [program, ini, "-q", "--no-plots",
@@ -166,6 +208,14 @@ def main():
             read_tum(os.path.join(out, "estimate_tum.txt")),
             read_tum(os.path.join(truth, "trajectory_tum.txt"))), None
 
+    if a.motion == "none" and not a.odometry_bearings:
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
+            try:
+                list(ex.map(lambda r: no_odometry_bearings(a.build, os.path.join(a.work, r)), rooms))
+            except subprocess.CalledProcessError as e:
+                print(f"pf_rooms.py: estimating the bearings without odometry: {e.cmd[0]} failed: "
+                      f"{e.stderr.decode().strip().splitlines()[-1:]}", file=sys.stderr)
+                return 1
     results, failed = {}, 0
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
         for room, seed, m, err in ex.map(lambda rs: run(*rs), [(r, s) for r in rooms for s in seeds]):

@@ -119,6 +119,12 @@ int main(int argc, char** argv)
                 "for rawlogs without CObservationOdometry (replaces the rawlog's odometry). With "
                 "odometry each window combines only frames taken while the robot moved little",
                 false, "", "FILE", cmd);
+            TCLAP::SwitchArg argNoOdometry(
+                "", "no-odometry",
+                "Ignore the rawlog's CObservationOdometry: each window combines its frames as if "
+                "the robot stood still, as on a robot without odometry (wifi-localize's chain "
+                "without odometry does the same)",
+                cmd);
             TCLAP::ValueArg<std::string> argCalib(
                 "c", "calib",
                 "Phase calibration: a file (one channel) or a folder "
@@ -176,6 +182,8 @@ int main(int argc, char** argv)
                 return rc;
 
             // ---- everything that can be wrong with the arguments, before any work
+            if (argNoOdometry.getValue() && argOdomTum.isSet())
+                throw std::invalid_argument("--no-odometry and --odometry-tum exclude each other");
             const std::string algo = argAlgo.getValue();
             ConfigFile cfg = loadConfig(argConfig.getValue(), algo);
             mrpt::containers::yaml params = mrpt::containers::yaml::Map();
@@ -288,7 +296,7 @@ int main(int argc, char** argv)
             // Returns what to add after one CSI observation.
             const auto handleOdometry = [&](const mrpt::obs::CObservation::Ptr& o)
             {
-                if (argOdomTum.isSet()) return;
+                if (argOdomTum.isSet() || argNoOdometry.getValue()) return;
                 if (auto od = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o))
                 {
                     processor.addOdometry(od->timestamp, od->odometry.asTPose());
@@ -430,10 +438,14 @@ int main(int argc, char** argv)
                       << "\n"
                       << "Algo  : " << algo << "\n"
                       << "Odometry: "
-                      << (odometryUsed == 0 ? std::string("none (windows by age only)")
-                                            : std::to_string(odometryUsed) + " poses from " +
-                                                  (argOdomTum.isSet() ? argOdomTum.getValue()
-                                                                      : std::string("the rawlog")))
+                      << (odometryUsed == 0
+                              ? std::string(
+                                    argNoOdometry.getValue() ? "none (--no-odometry: windows "
+                                                               "by age only)"
+                                                             : "none (windows by age only)")
+                              : std::to_string(odometryUsed) + " poses from " +
+                                    (argOdomTum.isSet() ? argOdomTum.getValue()
+                                                        : std::string("the rawlog")))
                       << "\n"
                       << "Output: " << argOut.getValue() << " (" << bearingsTotal << " bearings)\n";
             std::cout << "Bearings per transmitter:\n"

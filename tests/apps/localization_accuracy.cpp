@@ -6,7 +6,8 @@
  *
  * Per room (sim::randomRoomYaml, with odometry errors drawn from a realistic range):
  *  - bearings through the real chain: wifi-sim → csi-bearings (`default`, the receiver
- *    calibrated with the simulator's true offsets, odometry from the rawlog);
+ *    calibrated with the simulator's true offsets, odometry from the rawlog; for the runs
+ *    without odometry also with it ignored, --no-odometry);
  *  - kidnapped robot on a random drive: wifi-pf-localization (offline) and wifi-localize (live,
  *    the room streamed in real time by rt-ac86u-emulator), each with and without odometry;
  *  - drift correction on a multi-lap loop: wifi-graphslam --aps (known) and --estimate-aps;
@@ -385,11 +386,22 @@ std::string apArray(const Options& o)
     return kShare + "/arrays/ap-linear-" + (o.apStreams == 4 ? "4" : "2") + ".yaml";
 }
 
+/** The kidnapped drive's bearings for the runs without odometry: csi-bearings --no-odometry
+ *  (a robot without odometry has none for its bearing windows either); bearings.csv in folders
+ *  of sweeps made before it. */
+fs::path noOdometryBearings(const fs::path& kidnappedDir)
+{
+    const auto own = kidnappedDir / "bearings-no-odometry.csv";
+    return fs::exists(own) ? own : kidnappedDir / "bearings.csv";
+}
+
 /** Simulates a drive of the room and runs csi-bearings on it: truth in DIR/truth, bearings in
- *  DIR/bearings.csv (AoD too with --aod); the rawlog is removed afterwards. */
+ *  DIR/bearings.csv (AoD too with --aod), with `alsoWithoutOdometry` also
+ *  DIR/bearings-no-odometry.csv from the same frames with the rawlog's odometry ignored; the
+ *  rawlog is removed afterwards. */
 bool simulateAndEstimate(
     const std::string& scenarioYaml, const fs::path& dir, const fs::path& calib, Room& room,
-    const Options& o)
+    const Options& o, bool alsoWithoutOdometry = false)
 {
     fs::create_directories(dir);
     std::ofstream(dir / "scenario.yaml") << scenarioYaml;
@@ -400,12 +412,17 @@ bool simulateAndEstimate(
             room, "wifi-sim")
             .exitCode)
         return false;
-    const bool ok = runOrThrow(
-                        bin("csi-bearings") + " " + rawlog + " /dev/null --calib " +
-                            calib.string() + " --csv " + (dir / "bearings.csv").string() +
-                            (o.aod ? " --tx-array " + apArray(o) : "") + " -q",
-                        room, "csi-bearings")
-                        .exitCode == 0;
+    const auto estimate = [&](const std::string& csv, const std::string& extra)
+    {
+        return runOrThrow(
+                   bin("csi-bearings") + " " + rawlog + " /dev/null --calib " + calib.string() +
+                       " --csv " + (dir / csv).string() +
+                       (o.aod ? " --tx-array " + apArray(o) : "") + extra + " -q",
+                   room, "csi-bearings" + extra)
+                   .exitCode == 0;
+    };
+    bool ok = estimate("bearings.csv", "");
+    if (ok && alsoWithoutOdometry) ok = estimate("bearings-no-odometry.csv", " --no-odometry");
     fs::remove(rawlog);
     return ok;
 }
@@ -433,11 +450,13 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
         const auto out = dir / (odo == 0 ? "pf-odometry" : "pf-no-odometry");
         const std::string motion = odo == 0 ? "--odometry-tum " + (kt / "odometry_tum.txt").string()
                                             : "--max-speed " + fmt(room.speed, 3);
+        const auto bearings =
+            odo == 0 ? dir / "kidnapped" / "bearings.csv" : noOdometryBearings(dir / "kidnapped");
         const auto r = runOrThrow(
             bin("wifi-pf-localization") + " " + ini + " -q --no-plots -n " +
                 std::to_string(o.particles) + " -m " + (kt / "transmitters.yaml").string() +
-                " -b " + (dir / "kidnapped" / "bearings.csv").string() + " " + kSensorPose + " " +
-                motion + " -o " + out.string(),
+                " -b " + bearings.string() + " " + kSensorPose + " " + motion + " -o " +
+                out.string(),
             room, std::string("wifi-pf-localization (") + kRunNames[0][odo] + ")");
         if (r.exitCode == 0)
             room.kidnapped[0][odo] = kidnappedFigures(
@@ -471,7 +490,7 @@ loctest::TrackFromTruth trackFromTruthOfRoom(const fs::path& dir)
     BearingCsvOptions co;
     co.sensorPose = kSensorPose2D;
     co.names = &aps;
-    const auto bearings = readBearingCsv((dir / "kidnapped" / "bearings.csv").string(), co);
+    const auto bearings = readBearingCsv(noOdometryBearings(dir / "kidnapped").string(), co);
     const auto truth = Trajectory2D::fromTumFile((kt / "trajectory_tum.txt").string());
     return loctest::trackFromTruth(bearings, aps, truth, options, area);
 }
@@ -742,7 +761,7 @@ Room evaluateRoom(uint32_t seed, const Options& o)
 
     std::vector<test::ErrorRecord> bearingErrors;
     std::cerr << "[room " << seed << "] kidnapped drive" << std::flush;
-    if (simulateAndEstimate(kidnappedYaml, dir / "kidnapped", calib, room, o))
+    if (simulateAndEstimate(kidnappedYaml, dir / "kidnapped", calib, room, o, true))
     {
         room.kidnappedTruth =
             Trajectory2D::fromTumFile((dir / "kidnapped/truth/trajectory_tum.txt").string());
@@ -1150,8 +1169,9 @@ void printReport(const std::vector<Room>& rooms, bool evaluation, const Options&
                           "wifi-calibrate on the first 60 s of the loop drive with its odometry"
                         : "; AoA used")
               << ". Bearings: csi-bearings `default` with the true receiver offsets, both drives "
-                 "pooled (the random drive and the loop apart in parentheses); live, the same "
-                 "chain run by "
+                 "pooled (the random drive and the loop apart in parentheses); the kidnapped "
+                 "runs without odometry use the random drive's bearings estimated with its "
+                 "odometry ignored (csi-bearings --no-odometry); live, the same chain run by "
               << (o.liveChain == "sensor" ? "the CSI sensor (its bearing_* keys)" : "wifi-localize")
               << ".\n\n";
     std::cout << "| room | size [m] | odo scale / yaw drift | kidnapped offline odo / none [m] "

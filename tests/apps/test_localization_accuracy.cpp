@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -103,6 +104,17 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     EXPECT_LE(number(room, "central_beyond30_unflagged"), number(room, "central_beyond30"))
         << r.output;
     EXPECT_EQ(room.at("failed_programs"), "\"\"") << r.output;
+    // The runs without odometry take bearings estimated without it: the same frames, other
+    // windows while the robot turns.
+    const auto withOdo =
+        readBearingCsv(tmp.file("work/room-7/kidnapped/bearings.csv"), BearingCsvOptions());
+    const auto withoutOdo = readBearingCsv(
+        tmp.file("work/room-7/kidnapped/bearings-no-odometry.csv"), BearingCsvOptions());
+    EXPECT_EQ(withoutOdo.size(), withOdo.size());
+    size_t differ = 0;
+    for (size_t i = 0; i < std::min(withOdo.size(), withoutOdo.size()); ++i)
+        differ += withOdo[i].aoa != withoutOdo[i].aoa;
+    EXPECT_GT(differ, 0u);
     // The no-odometry track fitted from the true poses (its best case), in the CSV and again
     // from the recorded room alone.
     const double fromTruth = number(room, "noodo_track_from_truth_m");

@@ -182,6 +182,14 @@ TEST(BearingApp, DefaultEstimatorAndOdometry)
     EXPECT_NE(r.output.find("poses from the rawlog"), std::string::npos) << r.output;
     EXPECT_NE(test::readFile(tmp.file("a.csv")).find(",default,"), std::string::npos);
 
+    // --no-odometry: the rawlog's odometry (used above) ignored, as on a robot without any.
+    const auto none = test::run(
+        program() + " " + simulatedRawlog() + " " + tmp.file("n.rawlog") + " --no-odometry --csv " +
+        tmp.file("n.csv") + " -q");
+    ASSERT_EQ(none.exitCode, 0) << none.output;
+    EXPECT_NE(none.output.find("Odometry: none (--no-odometry"), std::string::npos) << none.output;
+    EXPECT_NE(test::readFile(tmp.file("n.csv")).find(",default,"), std::string::npos);
+
     // A TUM file instead (same clock).
     const std::string tum = tmp.file("odo.txt");
     {
@@ -195,6 +203,14 @@ TEST(BearingApp, DefaultEstimatorAndOdometry)
         tum + " -q");
     ASSERT_EQ(t.exitCode, 0) << t.output;
     EXPECT_NE(t.output.find("41 poses from " + tum), std::string::npos) << t.output;
+    // ... which --no-odometry contradicts: refused before any output is written.
+    const auto both = test::run(
+        program() + " " + simulatedRawlog() + " " + tmp.file("d.rawlog") + " --odometry-tum " +
+        tum + " --no-odometry -q");
+    EXPECT_NE(both.exitCode, 0);
+    EXPECT_NE(both.output.find("--no-odometry and --odometry-tum"), std::string::npos)
+        << both.output;
+    EXPECT_FALSE(fs::exists(tmp.file("d.rawlog")));
 
     // A broken TUM file is refused, naming file and line, before any output is written.
     {
