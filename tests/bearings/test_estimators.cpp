@@ -5,10 +5,14 @@
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/obs/bearing/BearingChainConfig.h>
 #include <mrpt_wifi/obs/bearing/BearingImages.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
+#include <fstream>
+
 #include "SyntheticCsi.h"
+#include "TestSupport.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::bearing;
@@ -373,18 +377,19 @@ TEST(BearingProcessorChain, OdometryLimitsTheWindowToFramesWithTheSameGeometry)
     s.rx = test::loadArray("rt-ac86u");
     s.snr_dB = 25;
     s.paths = {{20 * kDeg, 0, 12e-9, {1, 0}}};
-    const auto runChain = [&](bool withOdometry, double turnRate_radps)
+    const auto runChain = [&](bool withOdometry, double turnRate_radps, double period_s = 0.02,
+                              BearingProcessor::Options options = {})
     {
-        BearingProcessor proc(CsiPreprocessor({}, s.rx), createEstimator("default"), {});
+        BearingProcessor proc(CsiPreprocessor({}, s.rx), createEstimator("default"), options);
         EXPECT_EQ(proc.estimator().framesWanted(), 8u);
         CObservationWiFiBearing::Ptr last;
         for (int n = 0; n < 12; ++n)
         {
-            const double t = 1700000000.0 + 0.02 * n;
+            const double t = 1700000000.0 + period_s * n;
             if (withOdometry)
                 proc.addOdometry(
                     mrpt::Clock::fromDouble(t),
-                    mrpt::math::TPose2D(0, 0, turnRate_radps * n * 0.02));
+                    mrpt::math::TPose2D(0, 0, turnRate_radps * n * period_s));
             auto obs = test::synthesize(s);
             obs.timestamp = mrpt::Clock::fromDouble(t);
             if (auto b = proc.process(obs)) last = b;
@@ -392,8 +397,31 @@ TEST(BearingProcessorChain, OdometryLimitsTheWindowToFramesWithTheSameGeometry)
         EXPECT_TRUE(last);
         return last ? last->framesUsed : 0u;
     };
-    EXPECT_EQ(runChain(false, 0), 8u);             // no odometry: the whole window
-    EXPECT_EQ(runChain(true, 0), 8u);              // standing still: the whole window
+    EXPECT_EQ(runChain(false, 0), 8u);  // no odometry, 50 frames/s: 0.14 s, all 8
+    EXPECT_EQ(runChain(true, 0), 8u);   // standing still: the whole window
+    // Without odometry at 10 frames/s the robot may turn 70° over 8 frames: the last 0.15 s
+    // only; with odometry that says it stands still, all of them.
+    EXPECT_EQ(runChain(false, 0, 0.1), 2u);
+    EXPECT_EQ(runChain(true, 0, 0.1), 8u);
+    BearingProcessor::Options whole;
+    whole.maxWindowSpanWithoutOdometry_s = 0;  // off: up to windowMaxAge_s
+    EXPECT_EQ(runChain(false, 0, 0.1, whole), 8u);
+    // The span from the chain's YAML (csi-bearings --config, the sensor's bearing_options).
+    const std::string yaml = test::tempPath(".yaml");
+    std::ofstream(yaml) << "window:\n  max_span_without_odometry_s: 0.3\n";
+    EXPECT_DOUBLE_EQ(
+        loadBearingChainConfig(yaml, "default").window.maxWindowSpanWithoutOdometry_s, 0.3);
+    std::ofstream(yaml) << "window:\n  max_span_without_odometry_s: -1\n";
+    try
+    {
+        loadBearingChainConfig(yaml, "default");
+        ADD_FAILURE() << "a negative span was accepted";
+    }
+    catch (const std::invalid_argument& e)
+    {
+        EXPECT_NE(std::string(e.what()).find("max_span_without_odometry_s"), std::string::npos)
+            << e.what();
+    }
     const unsigned turning = runChain(true, 1.0);  // 57°/s: 3° is reached in 3 frames
     EXPECT_GE(turning, 2u);
     EXPECT_LE(turning, 3u);

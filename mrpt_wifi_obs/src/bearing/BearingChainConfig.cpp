@@ -54,6 +54,12 @@ BearingChainConfig loadBearingChainConfig(const std::string& path, const std::st
                 c.window.windowMaxAge_s = kv.second.as<double>();
             else if (k == "stride")
                 c.window.stride = std::max(1u, kv.second.as<unsigned>());
+            else if (k == "max_span_without_odometry_s")
+            {
+                c.window.maxWindowSpanWithoutOdometry_s = kv.second.as<double>();
+                if (!(c.window.maxWindowSpanWithoutOdometry_s >= 0))
+                    bad("window.max_span_without_odometry_s must be >= 0");
+            }
             else
                 bad("unknown window option '" + k + "'");
         }

@@ -2,6 +2,7 @@
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPose3D.h>
+#include <mrpt/system/datetime.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include <algorithm>
@@ -181,7 +182,19 @@ std::optional<mrpt::math::TPose2D> BearingProcessor::odometryAt(mrpt::Clock::tim
 
 void BearingProcessor::limitWindowByMotion()
 {
-    if (odometry_.empty() || frames_.size() < 2) return;
+    if (frames_.size() < 2) return;
+    if (odometry_.empty())
+    {
+        if (!(opts_.maxWindowSpanWithoutOdometry_s > 0)) return;
+        const auto newest = frames_.back()->timestamp;
+        size_t keepFrom = 0;
+        while (keepFrom + 1 < frames_.size() &&
+               mrpt::system::timeDifference(frames_[keepFrom]->timestamp, newest) >
+                   opts_.maxWindowSpanWithoutOdometry_s)
+            ++keepFrom;
+        frames_.erase(frames_.begin(), frames_.begin() + long(keepFrom));
+        return;
+    }
     const auto ref = odometryAt(frames_.back()->timestamp);
     if (!ref) return;
     size_t keepFrom = frames_.size() - 1;

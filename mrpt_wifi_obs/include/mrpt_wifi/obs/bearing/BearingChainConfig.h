@@ -13,7 +13,7 @@ namespace mrpt_wifi::bearing
  *  `csi-bearings --config` and the sensor's `bearing_options`, so both read it the same way:
  *  \code
  *  preprocess: {min_rssi_dbm: -80, require_calibration: false, max_streams: 4, ...}
- *  window: {capacity: 32, max_age_s: 1.0, stride: 1}
+ *  window: {capacity: 32, max_age_s: 1.0, stride: 1, max_span_without_odometry_s: 0.15}
  *  estimators: {music: {...}, aoa_only: {...}}   # per estimator name
  *  synthetic_aperture: {peers: {PEER_LABEL: "MAC", ...}, interval_s: 1.0}  # estimator sar
  *  \endcode */

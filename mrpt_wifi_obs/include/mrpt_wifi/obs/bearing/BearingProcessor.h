@@ -32,6 +32,10 @@ public:
          *  share the direct path's bearing; reflections still decorrelate over that motion. */
         double maxWindowTranslation_m = 0.15;
         double maxWindowRotation_rad = 3.0 * M_PI / 180;
+        /** Without odometry: a window combines only the frames taken this long before its
+         *  newest [s] (0: up to windowMaxAge_s). A robot may be moving or turning, and frames
+         *  combined over 0.8 s of a turn (8 frames at 10 frames/s) smear the bearing. */
+        double maxWindowSpanWithoutOdometry_s = 0.15;
         /** Odometry older than this before the newest CSI frame is forgotten [s]. */
         double odometryHistory_s = 5.0;
         /** AoD of a transmitter without a transmit-chain calibration (CleanCsi::txCalibration):
