@@ -29,6 +29,7 @@ import concurrent.futures
 import math
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -98,7 +99,8 @@ def no_odometry_bearings(build, room_dir):
     with open(os.path.join(kidnapped, "bearings.csv")) as f:
         header = f.readline().strip().split(",")
         aod = any(row.split(",")[header.index("has_aod")] == "1" for row in f)
-    streams = re.findall(r"streams: (\d+)", open(os.path.join(kidnapped, "scenario.yaml")).read())
+    with open(os.path.join(kidnapped, "scenario.yaml")) as f:
+        streams = re.findall(r"streams: (\d+)", f.read())
     rawlog = os.path.join(kidnapped, "drive-no-odometry.rawlog")
     truth = os.path.join(kidnapped, "truth-again")
     share = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "share", "arrays")
@@ -115,7 +117,7 @@ def no_odometry_bearings(build, room_dir):
         for leftover in (rawlog, csv + ".tmp"):
             if os.path.exists(leftover):
                 os.remove(leftover)
-        subprocess.run(["rm", "-rf", truth])
+        shutil.rmtree(truth, ignore_errors=True)
     return csv
 
 

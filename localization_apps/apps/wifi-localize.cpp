@@ -805,8 +805,7 @@ int main(int argc, char** argv)
                         loc.addOdometry(*odo);
                         if (mapper.enabled()) mapper.addOdometry(*odo);
                         // Our bearing chain, as csi-bearings', combines only the frames taken
-                        // near the newest; without odometry it would combine a window's frames
-                        // as if the robot stood still.
+                        // near the newest; without odometry only those of the last 0.15 s.
                         if (fallback)
                             fallback->addOdometry(odo->timestamp, odo->odometry.asTPose());
                         // So does a CSI sensor's own chain (rawlog-grabber has no way to give
@@ -948,7 +947,8 @@ int main(int argc, char** argv)
             const auto windows = [](bool odometry)
             {
                 return odometry ? "a window holds only the frames taken near the newest"
-                                : "a window's frames are combined as if the robot stood still";
+                                : "a window holds only the frames of its last "
+                                  "window.max_span_without_odometry_s (0.15 s unless set)";
             };
             if (nFallback > 0)
                 sum << "  bearing chain  : "

@@ -121,9 +121,9 @@ int main(int argc, char** argv)
                 false, "", "FILE", cmd);
             TCLAP::SwitchArg argNoOdometry(
                 "", "no-odometry",
-                "Ignore the rawlog's CObservationOdometry: each window combines its frames as if "
-                "the robot stood still, as on a robot without odometry (wifi-localize's chain "
-                "without odometry does the same)",
+                "Ignore the rawlog's CObservationOdometry, as on a robot without odometry: each "
+                "window combines only the frames of its last window.max_span_without_odometry_s "
+                "(wifi-localize's chain without odometry does the same)",
                 cmd);
             TCLAP::ValueArg<std::string> argCalib(
                 "c", "calib",
@@ -431,22 +431,28 @@ int main(int argc, char** argv)
             out.close();
 
             // ---- summary
+            std::string odometryLine;
+            if (odometryUsed > 0)
+                odometryLine = std::to_string(odometryUsed) + " poses from " +
+                               (argOdomTum.isSet() ? argOdomTum.getValue() : "the rawlog");
+            else
+            {
+                std::ostringstream o;
+                o << "none (" << (argNoOdometry.getValue() ? "--no-odometry: " : "");
+                const double span = cfg.window.maxWindowSpanWithoutOdometry_s;
+                if (span > 0)
+                    o << "windows of the last " << span << " s)";
+                else
+                    o << "windows by age only)";
+                odometryLine = o.str();
+            }
             std::cout << "Input : " << argIn.getValue() << " (" << csiSeen << " CSI frames)\n"
                       << "Array : " << rxArray.name << " (" << arrayPath << ")"
                       << (rxArray.isLinear() ? ", linear: AoA has a mirror candidate" : "") << "\n"
                       << "Calib : " << (calib.empty() ? "none (uncalibrated)" : calib.path())
                       << "\n"
                       << "Algo  : " << algo << "\n"
-                      << "Odometry: "
-                      << (odometryUsed == 0
-                              ? std::string(
-                                    argNoOdometry.getValue() ? "none (--no-odometry: windows "
-                                                               "by age only)"
-                                                             : "none (windows by age only)")
-                              : std::to_string(odometryUsed) + " poses from " +
-                                    (argOdomTum.isSet() ? argOdomTum.getValue()
-                                                        : std::string("the rawlog")))
-                      << "\n"
+                      << "Odometry: " << odometryLine << "\n"
                       << "Output: " << argOut.getValue() << " (" << bearingsTotal << " bearings)\n";
             std::cout << "Bearings per transmitter:\n"
                       << "  transmitter        frames  bearings  median AoA[deg]  median quality\n";
