@@ -661,16 +661,18 @@ const CleanCsi& CsiWindow::newest() const
     return ring_[(head_ + ring_.size() - 1) % ring_.size()];
 }
 
-void CsiWindow::recent(size_t n, std::vector<const CleanCsi*>& out) const
+void CsiWindow::recent(
+    size_t n, std::vector<const CleanCsi*>& out, std::optional<double> maxAge_s) const
 {
     out.clear();
     if (count_ == 0) return;
     const auto tNewest = newest().timestamp;
+    const double maxAge = std::min(maxAge_s_, maxAge_s.value_or(maxAge_s_));
     n = std::min(n, count_);
     for (size_t back = n; back-- > 0;)
     {
         const CleanCsi& f = ring_[(head_ + ring_.size() - 1 - back) % ring_.size()];
-        if (mrpt::system::timeDifference(f.timestamp, tNewest) > maxAge_s_) continue;
+        if (mrpt::system::timeDifference(f.timestamp, tNewest) > maxAge) continue;
         out.push_back(&f);
     }
 }

@@ -2,7 +2,6 @@
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPose3D.h>
-#include <mrpt/system/datetime.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 
 #include <algorithm>
@@ -182,19 +181,7 @@ std::optional<mrpt::math::TPose2D> BearingProcessor::odometryAt(mrpt::Clock::tim
 
 void BearingProcessor::limitWindowByMotion()
 {
-    if (frames_.size() < 2) return;
-    if (odometry_.empty())
-    {
-        if (!(opts_.maxWindowSpanWithoutOdometry_s > 0)) return;
-        const auto newest = frames_.back()->timestamp;
-        size_t keepFrom = 0;
-        while (keepFrom + 1 < frames_.size() &&
-               mrpt::system::timeDifference(frames_[keepFrom]->timestamp, newest) >
-                   opts_.maxWindowSpanWithoutOdometry_s)
-            ++keepFrom;
-        frames_.erase(frames_.begin(), frames_.begin() + long(keepFrom));
-        return;
-    }
+    if (odometry_.empty() || frames_.size() < 2) return;
     const auto ref = odometryAt(frames_.back()->timestamp);
     if (!ref) return;
     size_t keepFrom = frames_.size() - 1;
@@ -260,7 +247,11 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
         unsigned& since = sinceLast_[csi.transmitter];
         if (++since < opts_.stride) return nullptr;
         since = 0;
-        window.recent(est_->framesWanted(), frames_);
+        // Without odometry only the last maxWindowSpanWithoutOdometry_s: the robot may turn.
+        std::optional<double> span;
+        if (odometry_.empty() && opts_.maxWindowSpanWithoutOdometry_s > 0)
+            span = opts_.maxWindowSpanWithoutOdometry_s;
+        window.recent(est_->framesWanted(), frames_, span);
         limitWindowByMotion();
     }
     if (!est_->estimate(frames_, ctx, lastResult_) || !lastResult_.valid) return nullptr;

@@ -12,6 +12,7 @@
 #include <any>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -282,8 +283,11 @@ public:
 
     size_t size() const { return count_; }
     size_t capacity() const { return ring_.size(); }
-    /** Up to n most recent frames that are at most maxAge older than the newest, oldest first. */
-    void recent(size_t n, std::vector<const CleanCsi*>& out) const;
+    /** Up to n most recent frames that are at most maxAge (or `maxAge_s`, if given and
+     *  shorter) older than the newest, oldest first. */
+    void recent(
+        size_t n, std::vector<const CleanCsi*>& out,
+        std::optional<double> maxAge_s = std::nullopt) const;
     const CleanCsi& newest() const;
     void clear() { count_ = 0; }
 
