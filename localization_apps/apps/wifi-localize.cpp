@@ -984,8 +984,10 @@ int main(int argc, char** argv)
                 sum << ": " << loc.smoother().accepted() << " of " << loc.smoother().solves()
                     << " solves used (" << loc.smoother().restarts()
                     << " restarts: newest bearings unexplained)"
-                    << (loc.hasOdometry() ? "" : " (it needs odometry)") << ", "
-                    << fmt(loc.smoother().solveTime_s(), 2) << " s";
+                    << (loc.hasOdometry() || loc.smoother().options().withoutOdometry
+                            ? ""
+                            : " (without_odometry = false: it needs odometry)")
+                    << ", " << fmt(loc.smoother().solveTime_s(), 2) << " s";
             sum << "\n";
             if (const auto area = areaSummary(loc.wifiMap(), est.poses); !area.empty())
                 sum << "  area           : " << area << "\n";

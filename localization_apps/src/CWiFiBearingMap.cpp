@@ -110,6 +110,10 @@ void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
         throw std::invalid_argument("[" + s + "] min_std_deg and std_scale must be > 0");
     if (!(bearingWeight > 0 && bearingWeight <= 1))
         throw std::invalid_argument("[" + s + "] bearing_weight must be in (0, 1]");
+    // A filter on such a map runs without error and never moves from its prior.
+    if (!use.aoa && !use.aod)
+        throw std::invalid_argument(
+            "[" + s + "] use_aoa and use_aod are both false: the map would weigh no bearing");
 }
 
 void CWiFiBearingMap::TLikelihoodOptions::dumpToTextStream(std::ostream& out) const

@@ -89,8 +89,8 @@ public:
     void submit(CObservationWiFiCSI::Ptr frame);
     /** Robot odometry (any thread, time order), as csi-bearings gives its chain: a window then
      *  combines only the frames taken near the newest (bearing::BearingProcessor::addOdometry).
-     *  Handed to the chain before the next frame's estimation. Without it a moving robot's
-     *  window is combined as if it stood still. */
+     *  Handed to the chain before the next frame's estimation. Without it a window holds the
+     *  frames of the last Options::maxWindowSpanWithoutOdometry_s. */
     void addOdometry(mrpt::Clock::time_point t, const mrpt::math::TPose2D& odometry);
     /** Appends the frames that are done, each followed by its bearing observations. */
     void takeReady(std::vector<mrpt::obs::CObservation::Ptr>& out);
