@@ -964,7 +964,8 @@ int main(int argc, char** argv)
                         << windows(given > 0) << "\n";
                 }
             sum << "  bearings used  : " << loc.bearingsUsed()
-                << " (unknown transmitter: " << loc.unknownTransmitter() << ")\n"
+                << " (unknown transmitter: " << loc.unknownTransmitter()
+                << "; with an angle the map weighs: " << loc.bearingsWeighed() << ")\n"
                 << "  filter steps   : " << loc.steps() << "\n"
                 << "  pose outputs   : " << poseOutputs << " ("
                 << fmt(double(poseOutputs) / active, 1) << " /s while data flowed)\n"
@@ -1058,6 +1059,20 @@ int main(int argc, char** argv)
                 }
                 if (argDevTruth.isSet())
                     sum << "  device error   : " << computeStats(errs).asString() << "\n";
+            }
+            // E.g. AoA-only bearings on a map set to AoD only: the run ends normally, its
+            // estimate the prior's mean throughout.
+            if (loc.bearingsUsed() > 0 && loc.bearingsWeighed() == 0)
+            {
+                const auto& use = loc.wifiMap().likelihoodOptions.use;
+                const std::string w =
+                    "none of the " + std::to_string(loc.bearingsUsed()) +
+                    " bearings has an angle the map weighs (use_aoa = " +
+                    (use.aoa ? "true" : "false") + ", use_aod = " + (use.aod ? "true" : "false") +
+                    ", max_std_deg): the filter weighed nothing, its estimate is the initial "
+                    "distribution moved by the motion model";
+                sum << "  WARNING        : " << w << "\n";
+                std::cerr << "wifi-localize: warning: " << w << "\n";
             }
             std::cout << sum.str();
             std::ofstream(outDir + "/summary.txt") << sum.str();

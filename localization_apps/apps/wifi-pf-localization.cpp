@@ -15,6 +15,7 @@
 #include <mrpt/system/CTicTac.h>
 #include <mrpt/system/datetime.h>
 #include <mrpt/system/filesystem.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>  // wifiMapFromIni, boundByInitialPdf
@@ -361,6 +362,20 @@ int main(int argc, char** argv)
                                  "information)\n";
             }
             if (bearings.empty()) throw std::runtime_error("the input holds no bearings");
+            // E.g. AoA-only bearings on a map set to AoD only: the filter would run to the end
+            // and report its initial distribution.
+            {
+                const auto& lo = wifiMap->likelihoodOptions;
+                if (std::none_of(
+                        bearings.begin(), bearings.end(),
+                        [&](const BearingRecord& b) { return recordWeighed(b, lo.model, lo.use); }))
+                    throw std::invalid_argument(
+                        argIni.getValue() + ": none of the " + std::to_string(bearings.size()) +
+                        " bearings of the input has an angle the map weighs (use_aoa = " +
+                        (lo.use.aoa ? "true" : "false") +
+                        ", use_aod = " + (lo.use.aod ? "true" : "false") +
+                        ", max_std_deg = " + fmt(mrpt::RAD2DEG(lo.model.maxStd_rad), 1) + ")");
+            }
             // Without odometry: the unknown-motion random walk, from the .ini's [UnknownMotion]
             // section, --max-speed overriding.
             UnknownMotion motion;

@@ -12,11 +12,11 @@ double recordLogLikelihood(
 {
     const auto s = sensorWorldPose(robot, r.sensorPose);
     double ll = 0;
-    if (use.aoa && r.hasAoa && r.aoaStd <= model.maxStd_rad)
+    if (usesAoa(r, model, use))
         ll += model.logLikelihood(
             predictAoa(s, tx.pose.x, tx.pose.y), r.aoa, r.aoaAmbiguous, r.aoaMirror,
             model.sigma(r.aoaStd));
-    if (use.aod && r.hasAod && r.aodStd <= model.maxStd_rad)
+    if (usesAod(r, model, use))
         ll += model.logLikelihood(
             predictAod(tx.pose, s.x, s.y), r.aod, r.aodAmbiguous, r.aodMirror,
             model.sigma(r.aodStd));
@@ -36,10 +36,10 @@ std::optional<bool> recordAgrees(
                (ambiguous && std::abs(wrapToPi(predicted - mirror)) <= bound);
     };
     std::optional<bool> agrees;
-    if (use.aoa && r.hasAoa && r.aoaStd <= model.maxStd_rad)
+    if (usesAoa(r, model, use))
         agrees = within(
             predictAoa(s, tx.pose.x, tx.pose.y), r.aoa, r.aoaAmbiguous, r.aoaMirror, r.aoaStd);
-    if (use.aod && r.hasAod && r.aodStd <= model.maxStd_rad)
+    if (usesAod(r, model, use))
         agrees =
             agrees.value_or(true) &&
             within(predictAod(tx.pose, s.x, s.y), r.aod, r.aodAmbiguous, r.aodMirror, r.aodStd);

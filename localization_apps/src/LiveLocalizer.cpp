@@ -198,17 +198,18 @@ bool LiveLocalizer::step()
     {
         const auto& b = static_cast<const CObservationWiFiBearing&>(*o);
         recovery_->checkBearing(mrpt::Clock::toDouble(o->timestamp), b);
-        // Heard: a bearing with an angle the map's likelihood uses (as recordLogLikelihood
-        // selects them); a wide or missing one constrains nothing.
+        // Heard: a bearing with an angle the map's likelihood uses; a wide or missing one
+        // constrains nothing.
+        const auto record = recordFromObservation(b);
         const auto& lo = wifiMap_->likelihoodOptions;
-        if ((lo.use.aoa && b.aoaStd_rad <= lo.model.maxStd_rad) ||
-            (lo.use.aod && b.hasAod && b.aodStd_rad <= lo.model.maxStd_rad))
+        if (recordWeighed(record, lo.model, lo.use))
         {
             auto& heard = heard_[b.transmitter];
             heard = std::max(heard, mrpt::Clock::toDouble(o->timestamp));
+            ++bearingsWeighed_;
         }
         sensorOnRobot_ = mrpt::poses::CPose2D(b.sensorPose).asTPose();
-        if (smoother_.options().enabled) smoother_.addBearing(recordFromObservation(b));
+        if (smoother_.options().enabled) smoother_.addBearing(record);
     }
     if (const double f = recovery_->reseedFraction(t, dt); f > 0)
         act = withReseeding(act, f, recovery_->reseedRadius_m());

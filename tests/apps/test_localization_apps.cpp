@@ -401,6 +401,32 @@ TEST(LocalizationAppsPf, IniWithoutTheMapIsAnError)
     EXPECT_NE(r.out.find("creates no wifiBearingMap"), std::string::npos) << r.out;
 }
 
+TEST(LocalizationAppsPf, BearingsTheMapDoesNotWeighAreAnError)
+{
+    // Every bearing wider than the map's max_std_deg: the filter would run to the end and
+    // report its initial distribution. Refused before it runs, naming the keys.
+    const auto& f = fixture();
+    const std::string ini = f.dir + "/narrow.ini";
+    {
+        std::ifstream in(kIni);
+        std::ofstream out(ini);
+        bool replaced = false;
+        for (std::string line; std::getline(in, line);)
+        {
+            if (line.rfind("max_std_deg", 0) == 0) line = "max_std_deg = 0.0001", replaced = true;
+            out << line << "\n";
+        }
+        ASSERT_TRUE(replaced) << kIni;
+    }
+    const auto r =
+        run(kBin + "/wifi-pf-localization " + ini + " -q --no-plots -n 100 -m " + f.dir +
+            "/aps.yaml -b " + f.dir + "/bearings.csv --odometry-tum " + f.dir +
+            "/odometry.txt --sensor-pose 0.1 0 0 0 0 0 -o " + f.dir + "/pf-narrow");
+    EXPECT_EQ(r.rc, 1) << r.out;
+    EXPECT_NE(r.out.find("has an angle the map weighs"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("max_std_deg = 0.0"), std::string::npos) << r.out;
+}
+
 TEST(LocalizationAppsPf, DebianPfLocalizationWithLdPreload)
 {
     if (!mrpt::system::fileExists("/usr/bin/pf-localization"))

@@ -387,9 +387,43 @@ TEST(WifiLocalize, RunsWithoutOdometry)
         << r.result.output;
     EXPECT_NE(r.result.output.find("bearing chain  : no odometry"), std::string::npos)
         << r.result.output;
+    // Without odometry the window smoother fits a track (without_odometry = true), so it does
+    // not say it needs odometry, and the map weighs the bearings.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(
+        r.result.output, m, std::regex("window smoother: .*: ([0-9]+) of ([0-9]+) solves used")))
+        << r.result.output;
+    EXPECT_GT(std::stoul(m[2]), 0u) << r.result.output;
+    EXPECT_EQ(r.result.output.find("needs odometry"), std::string::npos) << r.result.output;
+    ASSERT_TRUE(std::regex_search(
+        r.result.output, m, std::regex("with an angle the map weighs: ([0-9]+)\\)")))
+        << r.result.output;
+    EXPECT_GT(std::stoul(m[1]), 0u) << r.result.output;
+    EXPECT_EQ(r.result.output.find("WARNING"), std::string::npos) << r.result.output;
     const auto e = errorsOf(r.estimate, r.truth, 5.0);
     ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
     EXPECT_LE(median(e.afterWarmup), 0.8) << r.result.output;
+}
+
+TEST(WifiLocalize, WarnsWhenTheMapWeighsNoneOfTheBearings)
+{
+    // The shipped .ini's map weighs AoD only; its own chain without the APs' transmit array
+    // gives AoA only, bearings the map ignores. The run ends normally (nothing recorded is
+    // lost), and the summary and stderr say why the estimate never moved.
+    test::TempDir tmp;
+    const auto r = runLive(
+        tmp, 4, false, {}, {},
+        {{"wifi-localize/bearing_algorithm", "default"}, {"wifi-localize/bearing_tx_array", ""}});
+    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    EXPECT_NE(r.result.output.find("with an angle the map weighs: 0)"), std::string::npos)
+        << r.result.output;
+    EXPECT_NE(r.result.output.find("wifi-localize: warning: none of the "), std::string::npos)
+        << r.result.output;
+    EXPECT_NE(r.result.output.find("(use_aoa = false, use_aod = true"), std::string::npos)
+        << r.result.output;
+    EXPECT_NE(
+        test::readFile(tmp.file("out/summary.txt")).find("WARNING        : none of the"),
+        std::string::npos);
 }
 
 TEST(WifiLocalize, ViewUnderXvfbShowsMapParticlesAndRays)

@@ -73,6 +73,22 @@ struct BearingUse
     bool aod = true;
 };
 
+/** Whether a record has an angle the model weighs: one that `use` selects, with a σ of at most
+ *  max_std. recordLogLikelihood() and recordAgrees() use only these angles. */
+inline bool usesAoa(const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
+{
+    return use.aoa && r.hasAoa && r.aoaStd <= model.maxStd_rad;
+}
+inline bool usesAod(const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
+{
+    return use.aod && r.hasAod && r.aodStd <= model.maxStd_rad;
+}
+inline bool recordWeighed(
+    const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
+{
+    return usesAoa(r, model, use) || usesAod(r, model, use);
+}
+
 /** log-likelihood of one record given the robot pose and the transmitter (AoA and/or AoD). */
 double recordLogLikelihood(
     const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,

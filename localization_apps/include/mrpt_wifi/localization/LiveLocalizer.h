@@ -117,6 +117,9 @@ public:
     double lastStepTime() const { return lastStepTime_; }
     size_t steps() const { return steps_; }
     uint64_t bearingsUsed() const { return bearingsUsed_; }
+    /** Of bearingsUsed(), those with an angle the map weighs (use_aoa / use_aod, within
+     *  max_std_deg): 0 with bearings used means the filter never left its prior. */
+    uint64_t bearingsWeighed() const { return bearingsWeighed_; }
     uint64_t unknownTransmitter() const { return unknown_; }
     bool hasOdometry() const { return lastOdo_.has_value(); }
 
@@ -151,7 +154,7 @@ private:
     bool areaFromInitPdf_ = false;
     double lastStepTime_ = 0;
     size_t steps_ = 0;
-    uint64_t bearingsUsed_ = 0, unknown_ = 0;
+    uint64_t bearingsUsed_ = 0, bearingsWeighed_ = 0, unknown_ = 0;
 };
 
 /** Live device mapping: wifi-iot-map's machinery (raysFromBearings + triangulateDevice) on the
