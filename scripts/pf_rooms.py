@@ -35,13 +35,15 @@ import subprocess
 import sys
 
 
-def derive_ini(src, dst, overrides):
-    """Copy of src with [Section] key = value set (replaced, or added to its section)."""
+def derive_ini(src, dst, overrides, drop=()):
+    """Copy of src with [Section] key = value set (replaced, or added to its section), and
+    without the sections named in drop."""
     wanted = {}
     for o in overrides:
         key, value = o.split("=", 1)
         section, name = key.split("/", 1)
-        wanted.setdefault(section, {})[name] = value
+        if section not in drop:
+            wanted.setdefault(section, {})[name] = value
     out, done, section = [], set(), None
 
     def flush(sec):
@@ -55,7 +57,9 @@ def derive_ini(src, dst, overrides):
         if m:
             flush(section)
             section = m.group(1)
-        else:
+        if section in drop:
+            continue
+        if not m:
             m = re.match(r"\s*([^;=\s]+)\s*=", line)
             if m and m.group(1) in wanted.get(section, {}):
                 line = f"{m.group(1)} = {wanted[section][m.group(1)]}"
