@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/Clock.h>
 #include <mrpt/core/bits_math.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/system/filesystem.h>
@@ -9,6 +10,7 @@
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -236,6 +238,13 @@ LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
 {
     const auto [particles, mean] = pdf_.getCovarianceAndMean();
     Uncertainty u{particles, particles, mean.asTPose()};
+    // The reported pose is the smoother's, not the particles' mean: the particles' squared
+    // error about it is their covariance plus the offset's outer product.
+    const auto reportedPose = estimate();
+    const Eigen::Vector3d offset(
+        reportedPose.x - u.particlesMean.x, reportedPose.y - u.particlesMean.y,
+        mrpt::math::wrapToPi(reportedPose.phi - u.particlesMean.phi));
+    u.reported.asEigen() += offset * offset.transpose();
     if (!(opts_.bearingBiasStd_deg > 0)) return u;
     // A transmitter heard in the last few seconds constrains the pose now.
     const double kHeardWithin_s = 5.0;
@@ -247,7 +256,7 @@ LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
     const auto& a = wifiMap_->area();
     const double prior_m = a ? std::hypot(a->max.x - a->min.x, a->max.y - a->min.y) : 100.0;
     u.reported += bearingBiasCovariance(
-        estimate(), sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
+        reportedPose, sensorOnRobot_, txs, wifiMap_->likelihoodOptions.use,
         mrpt::DEG2RAD(opts_.bearingBiasStd_deg), prior_m);
     return u;
 }

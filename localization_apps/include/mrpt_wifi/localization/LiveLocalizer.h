@@ -92,8 +92,9 @@ public:
 
     /** Weighted mean and the particles' spread (sqrt of the largest position variance). */
     mrpt::math::TPose2D mean() const;
-    /** The pose to report: with odometry, mean() refined by the `[WindowSmoother]` (as
-     *  wifi-pf-localization does offline) once it has an accepted solve; else mean(). */
+    /** The pose to report: mean() refined by the `[WindowSmoother]` (as wifi-pf-localization
+     *  does offline; without odometry its fitted track) once it has an accepted solve; else
+     *  mean(). */
     mrpt::math::TPose2D estimate() const { return smoothed_ ? *smoothed_ : mean(); }
     const WindowSmoother& smoother() const { return smoother_; }
     double spread_m() const;
@@ -103,10 +104,11 @@ public:
         /** The particles' weighted covariance (MRPT's getCovarianceAndMean: the heading's
          *  spread around the mean, wrapped). */
         mrpt::math::CMatrixDouble33 particles;
-        /** `particles` plus the transmitters' bearing bias (bearing_bias_std_deg): a
-         *  converged cloud is as narrow as the bearings agree with each other, not as their
-         *  common error. Alone its 95 % ellipse held 25-77 % of the errors after convergence
-         *  with odometry (development rooms 1-10, live). */
+        /** The particles' spread about estimate() (`particles` plus the outer product of
+         *  estimate() − particlesMean), plus the transmitters' bearing bias
+         *  (bearing_bias_std_deg): a converged cloud is as narrow as the bearings agree with
+         *  each other, not as their common error. Alone its 95 % ellipse held 25-77 % of the
+         *  errors after convergence with odometry (development rooms 1-10, live). */
         mrpt::math::CMatrixDouble33 reported;
         /** The particles' weighted mean (mean()), from the same pass. */
         mrpt::math::TPose2D particlesMean;
