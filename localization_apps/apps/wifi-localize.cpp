@@ -29,6 +29,7 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt/system/os.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/Trajectory2D.h>
@@ -1064,13 +1065,12 @@ int main(int argc, char** argv)
             // estimate the prior's mean throughout.
             if (loc.bearingsUsed() > 0 && loc.bearingsWeighed() == 0)
             {
-                const auto& use = loc.wifiMap().likelihoodOptions.use;
-                const std::string w =
-                    "none of the " + std::to_string(loc.bearingsUsed()) +
-                    " bearings has an angle the map weighs (use_aoa = " +
-                    (use.aoa ? "true" : "false") + ", use_aod = " + (use.aod ? "true" : "false") +
-                    ", max_std_deg): the filter weighed nothing, its estimate is the initial "
-                    "distribution moved by the motion model";
+                const auto& lo = loc.wifiMap().likelihoodOptions;
+                const std::string w = "none of the " + std::to_string(loc.bearingsUsed()) +
+                                      " bearings has an angle the map weighs (" +
+                                      weighedAnglesString(lo.model, lo.use) +
+                                      "): the filter weighed nothing, its estimate is the "
+                                      "initial distribution moved by the motion model";
                 sum << "  WARNING        : " << w << "\n";
                 std::cerr << "wifi-localize: warning: " << w << "\n";
             }

@@ -371,10 +371,8 @@ int main(int argc, char** argv)
                         [&](const BearingRecord& b) { return recordWeighed(b, lo.model, lo.use); }))
                     throw std::invalid_argument(
                         argIni.getValue() + ": none of the " + std::to_string(bearings.size()) +
-                        " bearings of the input has an angle the map weighs (use_aoa = " +
-                        (lo.use.aoa ? "true" : "false") +
-                        ", use_aod = " + (lo.use.aod ? "true" : "false") +
-                        ", max_std_deg = " + fmt(mrpt::RAD2DEG(lo.model.maxStd_rad), 1) + ")");
+                        " bearings of the input has an angle the map weighs (" +
+                        weighedAnglesString(lo.model, lo.use) + ")");
             }
             // Without odometry: the unknown-motion random walk, from the .ini's [UnknownMotion]
             // section, --max-speed overriding.

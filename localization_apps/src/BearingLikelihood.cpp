@@ -1,4 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt/core/bits_math.h>
+#include <mrpt/core/format.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 
 #include <Eigen/Dense>
@@ -6,6 +8,13 @@
 
 namespace mrpt_wifi::localization
 {
+std::string weighedAnglesString(const RobustBearingModel& model, const BearingUse& use)
+{
+    return mrpt::format(
+        "use_aoa = %s, use_aod = %s, max_std_deg = %.1f", use.aoa ? "true" : "false",
+        use.aod ? "true" : "false", mrpt::RAD2DEG(model.maxStd_rad));
+}
+
 double recordLogLikelihood(
     const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
     const RobustBearingModel& model, const BearingUse& use)

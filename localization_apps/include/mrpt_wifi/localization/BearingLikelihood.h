@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace mrpt_wifi::localization
@@ -88,6 +89,9 @@ inline bool recordWeighed(
 {
     return usesAoa(r, model, use) || usesAod(r, model, use);
 }
+/** "use_aoa = …, use_aod = …, max_std_deg = …": the keys that decide recordWeighed(), for
+ *  messages. */
+std::string weighedAnglesString(const RobustBearingModel& model, const BearingUse& use);
 
 /** log-likelihood of one record given the robot pose and the transmitter (AoA and/or AoD). */
 double recordLogLikelihood(
