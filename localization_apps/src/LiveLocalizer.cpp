@@ -240,7 +240,7 @@ LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
     Uncertainty u{particles, particles, mean.asTPose()};
     // The reported pose is the smoother's, not the particles' mean: the particles' squared
     // error about it is their covariance plus the offset's outer product.
-    const auto reportedPose = smoothed_ ? *smoothed_ : u.particlesMean;  // estimate(), one pass
+    const auto reportedPose = estimateGiven(u.particlesMean);
     const Eigen::Vector3d offset(
         reportedPose.x - u.particlesMean.x, reportedPose.y - u.particlesMean.y,
         mrpt::math::wrapToPi(reportedPose.phi - u.particlesMean.phi));

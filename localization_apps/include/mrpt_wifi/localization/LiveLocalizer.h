@@ -95,7 +95,7 @@ public:
     /** The pose to report: mean() refined by the `[WindowSmoother]` (as wifi-pf-localization
      *  does offline; without odometry its fitted track) once it has an accepted solve; else
      *  mean(). */
-    mrpt::math::TPose2D estimate() const { return smoothed_ ? *smoothed_ : mean(); }
+    mrpt::math::TPose2D estimate() const { return estimateGiven(mean()); }
     const WindowSmoother& smoother() const { return smoother_; }
     double spread_m() const;
     /** Covariances of (x, y, φ) [m², m², rad²] of estimate(). */
@@ -134,6 +134,12 @@ public:
     bool areaFromInitialPdf() const { return areaFromInitPdf_; }
 
 private:
+    /** estimate() with the particles' mean already computed (one pass over them, not two). */
+    mrpt::math::TPose2D estimateGiven(const mrpt::math::TPose2D& particlesMean) const
+    {
+        return smoothed_ ? *smoothed_ : particlesMean;
+    }
+
     LiveLocalizerOptions opts_;
     mrpt::maps::CMultiMetricMap::Ptr map_ = std::make_shared<mrpt::maps::CMultiMetricMap>();
     CWiFiBearingMap::Ptr wifiMap_;
