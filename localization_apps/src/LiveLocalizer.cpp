@@ -108,6 +108,9 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     map_->maps.push_back(wifiMap_);
     motion_.loadFromConfigFile(ini, "UnknownMotion");
     cv_ = ConstantVelocityPrediction(motion_);
+    // Until odometry arrives the motion is unknown: its tempering of the bearings applies.
+    mapBearingWeight_ = wifiMap_->likelihoodOptions.bearingWeight;
+    wifiMap_->likelihoodOptions.bearingWeight = mapBearingWeight_ * motion_.bearingWeight;
     recoveryOptions_.loadFromConfigFile(ini, "ParticleRecovery");
     recovery_.emplace(recoveryOptions_, wifiMap_.get());
     WindowSmootherOptions smootherOptions;
@@ -145,8 +148,9 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
 void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
 {
     // From the first reading on, odometry drives the filter: its bearing weight applies.
-    if (!lastOdo_ && odoMotion_)
-        wifiMap_->likelihoodOptions.bearingWeight *= odoMotion_->bearingWeight;
+    if (!lastOdo_)
+        wifiMap_->likelihoodOptions.bearingWeight =
+            mapBearingWeight_ * (odoMotion_ ? odoMotion_->bearingWeight : 1.0);
     lastOdo_ = odo.odometry;
     if (!odoAtLastStep_) odoAtLastStep_ = odo.odometry;
     smoother_.addOdometry(mrpt::Clock::toDouble(odo.timestamp), odo.odometry.asTPose());

@@ -110,6 +110,7 @@ void UnknownMotion::loadFromConfigFile(
     forwardOnly = cfg.read_bool(s, "forward_only", forwardOnly);
     wideFraction = cfg.read_double(s, "wide_fraction", wideFraction);
     wideCorrelationTime_s = cfg.read_double(s, "wide_correlation_time_s", wideCorrelationTime_s);
+    bearingWeight = cfg.read_double(s, "bearing_weight", bearingWeight);
     validate();
 }
 
@@ -125,6 +126,8 @@ void UnknownMotion::validate() const
     requirePositive(velocityWindow_s, m + "velocity_window_s");
     requirePositive(wideCorrelationTime_s, m + "wide_correlation_time_s");
     requireFraction(wideFraction, m + "wide_fraction");
+    requirePositive(bearingWeight, m + "bearing_weight");
+    requireFraction(bearingWeight, m + "bearing_weight");
 }
 
 std::string UnknownMotion::asString() const
@@ -138,6 +141,7 @@ std::string UnknownMotion::asString() const
           << (forwardOnly ? ", forward only" : "");
     if (wideFraction > 0)
         o << ", " << 100 * wideFraction << " % of steps with tau " << wideCorrelationTime_s << " s";
+    if (bearingWeight != 1) o << ", bearings weighted " << bearingWeight;
     return o.str();
 }
 

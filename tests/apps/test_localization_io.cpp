@@ -298,6 +298,29 @@ TEST(ConstantVelocityPrediction, ForwardOnlyMovesAlongTheHeading)
     EXPECT_TRUE(r.forwardOnly);
 }
 
+TEST(UnknownMotion, BearingWeightIsReadAndOutsideZeroOneNamesTheKey)
+{
+    mrpt::config::CConfigFileMemory ini("[UnknownMotion]\nbearing_weight = 0.5\n");
+    mrpt_wifi::localization::UnknownMotion r;
+    EXPECT_EQ(r.bearingWeight, 1.0);  // untempered unless the .ini says so
+    r.loadFromConfigFile(ini, "UnknownMotion");
+    EXPECT_EQ(r.bearingWeight, 0.5);
+    EXPECT_NE(r.asString().find("bearings weighted 0.5"), std::string::npos) << r.asString();
+    for (const std::string value : {"0", "1.5", "-0.2"})
+    {
+        mrpt::config::CConfigFileMemory bad("[UnknownMotion]\nbearing_weight = " + value + "\n");
+        try
+        {
+            mrpt_wifi::localization::UnknownMotion().loadFromConfigFile(bad, "UnknownMotion");
+            ADD_FAILURE() << "accepted bearing_weight = " << value;
+        }
+        catch (const std::invalid_argument& e)
+        {
+            EXPECT_NE(std::string(e.what()).find("bearing_weight"), std::string::npos) << e.what();
+        }
+    }
+}
+
 TEST(UnknownMotion, WideFractionMakesTheWalkHeavyTailed)
 {
     // Issue 12.3: a tight walk for straight drives, with a few wide steps for the turns the

@@ -2,6 +2,7 @@
  * model of the live filter. */
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/vector_loadsave.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt_wifi/emulator/Emulator.h>
@@ -188,6 +189,29 @@ TEST(UnknownMotion, RandomWalkSpreadIsIndependentOfTheStepRate)
     // Ten steps of 0.05 s spread as much as one of 0.5 s (variance linear in time).
     const auto b = m.makeAction(0.05);
     EXPECT_NEAR(10 * b->poseChange->getCovariance()(0, 0), cov(0, 0), 0.02 * cov(0, 0));
+}
+
+TEST(LiveLocalizer, TempersTheBearingsByTheMotionModelInUse)
+{
+    // Without odometry [UnknownMotion]'s bearing_weight applies, from the first odometry
+    // reading on [OdometryMotion]'s instead; both on top of the map's own.
+    const std::string share = MRPT_WIFI_SOURCE_DIR "/share/localization";
+    mrpt::config::CConfigFileMemory ini(
+        mrpt::io::file_get_contents(share + "/wifi-localize-emulator.ini"));
+    ini.write(
+        "MetricMap_wifiBearingMap_00_creationOpts", "transmitters_file",
+        share + "/kidnapped-aps.yaml");
+    ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "bearing_weight", 0.8);
+    ini.write("UnknownMotion", "bearing_weight", 0.5);
+    ini.write("OdometryMotion", "bearing_weight", 0.3);
+    localization::LiveLocalizer loc(ini, share);
+    EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.5);
+    mrpt::obs::CObservationOdometry odo;
+    loc.addOdometry(odo);
+    EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.3);
+    odo.odometry = mrpt::poses::CPose2D(0.1, 0, 0);
+    loc.addOdometry(odo);  // applied once, not once per reading
+    EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.3);
 }
 
 TEST(LiveDeviceMapper, OffUnlessAskedAndBadOptionsNameTheKey)

@@ -147,6 +147,7 @@ private:
     mrpt::bayes::CParticleFilter pf_;
     mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odoModel_;
     std::optional<OdometryMotion> odoMotion_;  //!< [OdometryMotion], if the .ini has one
+    double mapBearingWeight_ = 1.0;            //!< the map's own bearing_weight, before a motion's
     std::optional<mrpt::poses::CPose2D> lastOdo_, odoAtLastStep_;
     std::vector<CObservationWiFiBearing::Ptr> pending_;
     /** Newest bearing time [s] per transmitter used, and the receive array's pose on the

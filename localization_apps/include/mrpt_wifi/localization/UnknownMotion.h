@@ -55,6 +55,12 @@ struct UnknownMotion
      *  then pick them). 0: a single Gaussian. */
     double wideFraction = 0.0;
     double wideCorrelationTime_s = 1.0;  //!< τ of the wide part
+    /** In (0, 1]: without odometry, each bearing's log-likelihood is multiplied by this (on top
+     *  of the map's CWiFiBearingMap bearing_weight), as OdometryMotion's does with odometry.
+     *  Bearings a fraction of a second apart err alike, so counting them as independent makes
+     *  the cloud narrower than the multipath allows. The shipped .ini keeps 1: 0.5 traded rooms
+     *  on the development sweep (share/localization/README.md). */
+    double bearingWeight = 1.0;
 
     /** σ of the position change per axis [m] and of the heading change [rad] over `dt_s`. */
     double stdXY(double dt_s) const;
@@ -70,7 +76,8 @@ struct UnknownMotion
 
     /** Reads `max_speed_mps`, `max_turn_rate_dps`, `correlation_time_s`, `max_step_s`,
      *  `min_std_xy`, `min_std_phi_deg`, `constant_velocity` (bool), `velocity_window_s`,
-     *  `forward_only` (bool), `wide_fraction`, `wide_correlation_time_s` from `section`
+     *  `forward_only` (bool), `wide_fraction`, `wide_correlation_time_s`, `bearing_weight` from
+     *  `section`
      *  (missing keys keep their value).
      *  Throws std::invalid_argument on non-positive speeds or times. */
     void loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
@@ -117,8 +124,8 @@ struct OdometryMotion
     /** In (0, 1]: while odometry drives the filter, each bearing's log-likelihood is multiplied
      *  by this (on top of the map's CWiFiBearingMap bearing_weight). With the odometry carrying
      *  the particles between spots, bearings from one spot, which err alike, need not count as
-     *  independent evidence; without odometry the bearings alone hold the cloud together and
-     *  tempering them loosened it (development rooms), hence here and not in the map. */
+     *  independent evidence. Without odometry UnknownMotion's bearing_weight applies instead:
+     *  each motion model has its own, not the map. */
     double bearingWeight = 1.0;
 
     /** σ of the position change per axis [m] and of the heading change [rad] for a step of
