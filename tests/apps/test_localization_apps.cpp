@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 // The command-line programs, and the map inside Debian's own pf-localization (LD_PRELOAD).
 #include <gtest/gtest.h>
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/graphs/CNetworkOfPoses.h>
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/system/filesystem.h>
@@ -175,6 +176,42 @@ TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
     const auto bad = run(common + " --max-speed 0 -o " + f.dir + "/pf-bad");
     EXPECT_EQ(bad.rc, 1);
     EXPECT_NE(bad.out.find("max_speed_mps must be > 0"), std::string::npos) << bad.out;
+}
+
+TEST(LocalizationAppsPf, WithoutOdometryUnknownMotionBearingWeightTempersTheBearings)
+{
+    // [UnknownMotion] bearing_weight multiplies each bearing's log-likelihood while the motion
+    // is unknown: the same run as the map's own bearing_weight at that value, another run than
+    // the untempered one (the same input and seed).
+    const auto& f = fixture();
+    const auto iniWith = [&](const std::string& name, const std::string& section, double weight)
+    {
+        mrpt::config::CConfigFileMemory ini(mrpt::io::file_get_contents(kIni));
+        ini.write(section, "bearing_weight", weight);
+        std::string text;
+        ini.getContent(text);
+        const std::string path = f.dir + "/" + name + ".ini";
+        std::ofstream(path) << text;
+        return path;
+    };
+    const auto runWith = [&](const std::string& ini, const std::string& out)
+    {
+        const auto r =
+            run(kBin + "/wifi-pf-localization " + ini +
+                " -q --no-plots -n 500 --max-speed 0.6 -m " + f.dir + "/aps.yaml -b " + f.dir +
+                "/bearings.csv --sensor-pose 0.1 0 0 0 0 0 -o " + f.dir + "/" + out);
+        EXPECT_EQ(r.rc, 0) << r.out;
+        return std::make_pair(
+            r.out, mrpt_wifi::test::readFile(f.dir + "/" + out + "/estimate_tum.txt"));
+    };
+    const auto motion = runWith(iniWith("motion-half", "UnknownMotion", 0.5), "pf-motion-half");
+    const auto map = runWith(
+        iniWith("map-half", "MetricMap_wifiBearingMap_00_likelihoodOpts", 0.5), "pf-map-half");
+    const auto plain = runWith(kIni, "pf-untempered");
+    EXPECT_NE(motion.first.find("bearings weighted 0.5"), std::string::npos) << motion.first;
+    ASSERT_FALSE(motion.second.empty());
+    EXPECT_EQ(motion.second, map.second);
+    EXPECT_NE(motion.second, plain.second);
 }
 
 TEST(LocalizationAppsPf, WithoutOdometryWithinOneAndAHalfTimesTheOdometryError)
