@@ -465,10 +465,8 @@ int main(int argc, char** argv)
                 app.params.write(sect, "particles_count", argParticles.getValue());
             app.params.write(sect, "logOutput_dir", outDir + "/mrpt");
             if (!txFile.empty()) app.params.write(mapSect, "transmitters_file", txFile);
-            // The motion model's tempering of the bearings, on top of the map's own.
-            if (const double motionWeight = odometryMotion ? odometryMotion->bearingWeight
-                                            : odo.empty()  ? motion.bearingWeight
-                                                           : 1.0;
+            if (const double motionWeight =
+                    motionBearingWeight(!odo.empty(), motion, odometryMotion);
                 motionWeight != 1)
                 app.params.write(
                     "MetricMap_wifiBearingMap_00_likelihoodOpts", "bearing_weight",

@@ -110,7 +110,8 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     cv_ = ConstantVelocityPrediction(motion_);
     // Until odometry arrives the motion is unknown: its tempering of the bearings applies.
     mapBearingWeight_ = wifiMap_->likelihoodOptions.bearingWeight;
-    wifiMap_->likelihoodOptions.bearingWeight = mapBearingWeight_ * motion_.bearingWeight;
+    wifiMap_->likelihoodOptions.bearingWeight =
+        mapBearingWeight_ * motionBearingWeight(false, motion_, odoMotion_);
     recoveryOptions_.loadFromConfigFile(ini, "ParticleRecovery");
     recovery_.emplace(recoveryOptions_, wifiMap_.get());
     WindowSmootherOptions smootherOptions;
@@ -150,7 +151,7 @@ void LiveLocalizer::addOdometry(const mrpt::obs::CObservationOdometry& odo)
     // From the first reading on, odometry drives the filter: its bearing weight applies.
     if (!lastOdo_)
         wifiMap_->likelihoodOptions.bearingWeight =
-            mapBearingWeight_ * (odoMotion_ ? odoMotion_->bearingWeight : 1.0);
+            mapBearingWeight_ * motionBearingWeight(true, motion_, odoMotion_);
     lastOdo_ = odo.odometry;
     if (!odoAtLastStep_) odoAtLastStep_ = odo.odometry;
     smoother_.addOdometry(mrpt::Clock::toDouble(odo.timestamp), odo.odometry.asTPose());

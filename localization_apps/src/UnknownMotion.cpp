@@ -204,6 +204,13 @@ void OdometryMotion::validate() const
     requireFraction(bearingWeight, m + "bearing_weight");
 }
 
+double motionBearingWeight(
+    bool withOdometry, const UnknownMotion& unknown, const std::optional<OdometryMotion>& odometry)
+{
+    if (!withOdometry) return unknown.bearingWeight;
+    return odometry ? odometry->bearingWeight : 1.0;
+}
+
 std::string OdometryMotion::asString() const
 {
     std::ostringstream o;

@@ -7,6 +7,7 @@
 #include <mrpt/poses/CPose2D.h>
 
 #include <deque>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -148,6 +149,12 @@ struct OdometryMotion
     void validate() const;
     std::string asString() const;
 };
+
+/** The tempering of the bearings by the motion model driving the filter, on top of the map's own
+ *  bearing_weight: `odometry`'s with odometry (1 with MRPT's model, without [OdometryMotion]),
+ *  `unknown`'s without. The one rule for wifi-pf-localization and wifi-localize. */
+double motionBearingWeight(
+    bool withOdometry, const UnknownMotion& unknown, const std::optional<OdometryMotion>& odometry);
 
 /** The constant-velocity prediction of UnknownMotion: fed with the filter's estimate after each
  *  step, it predicts the next step's pose increment in the robot frame.
