@@ -228,6 +228,10 @@ bool LiveLocalizer::step()
     recovery_->setEstimate(estimate);
     smoothed_.reset();
     smoothed_ = smoother_.update(t, estimate, [this] { return spread_m(); });
+    if (smoothed_)
+        lastSmootherOffset_.emplace(
+            smoothed_->x - estimate.x, smoothed_->y - estimate.y,
+            mrpt::math::wrapToPi(smoothed_->phi - estimate.phi));
     lastStepTime_ = t;
     ++steps_;
     bearingsUsed_ += n;
@@ -250,6 +254,15 @@ LiveLocalizer::Uncertainty LiveLocalizer::uncertainty() const
         reportedPose.x - u.particlesMean.x, reportedPose.y - u.particlesMean.y,
         mrpt::math::wrapToPi(reportedPose.phi - u.particlesMean.phi));
     u.reported.asEigen() += offset * offset.transpose();
+    // Without the smoother's estimate the mean is reported, off by what it was last seen off.
+    if (!smoothed_ && lastSmootherOffset_)
+    {
+        const auto& d = *lastSmootherOffset_;
+        const double distance2 = d.x * d.x + d.y * d.y;
+        u.reported(0, 0) += distance2;
+        u.reported(1, 1) += distance2;
+        u.reported(2, 2) += d.phi * d.phi;
+    }
     if (!(opts_.bearingBiasStd_deg > 0)) return u;
     // A transmitter heard in the last few seconds constrains the pose now.
     const double kHeardWithin_s = 5.0;

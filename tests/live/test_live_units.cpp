@@ -5,8 +5,10 @@
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
+#include <mrpt/random/RandomGenerators.h>
 #include <mrpt_wifi/emulator/Emulator.h>
 #include <mrpt_wifi/emulator/LoopbackUdp.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/sensor/CWiFiOdometryUdpSensor.h>
 #include <mrpt_wifi/sim/Simulator.h>
@@ -212,6 +214,80 @@ TEST(LiveLocalizer, TempersTheBearingsByTheMotionModelInUse)
     odo.odometry = mrpt::poses::CPose2D(0.1, 0, 0);
     loc.addOdometry(odo);  // applied once, not once per reading
     EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.3);
+}
+
+TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
+{
+    // With odometry the smoother's estimate is reported while its solves are used; when they
+    // stop, the particles' mean is, and how far it was last seen from the smoother's estimate
+    // stays in the reported σ: a narrow cloud can lag the robot by more than its own spread.
+    const std::string share = MRPT_WIFI_SOURCE_DIR "/share/localization";
+    mrpt::config::CConfigFileMemory ini(
+        mrpt::io::file_get_contents(share + "/wifi-localize-emulator.ini"));
+    ini.write(
+        "MetricMap_wifiBearingMap_00_creationOpts", "transmitters_file",
+        share + "/kidnapped-aps.yaml");
+    ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "use_aoa", true);
+    ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "use_aod", false);
+    ini.write("wifi-localize", "bearing_bias_std_deg", 0.0);  // the particles' σ alone
+    for (const auto& [section, key] :
+         {std::pair{"LocalizationExperiment", "particles_count"},
+          {"KLD_options", "KLD_minSampleSize"},
+          {"KLD_options", "KLD_maxSampleSize"}})
+        ini.write(section, key, 500);
+    mrpt::random::getRandomGenerator().randomize(3);
+    localization::LiveLocalizer loc(ini, share);
+    const auto& aps = loc.wifiMap().transmitters().transmitters();
+    ASSERT_GE(aps.size(), 3u);
+
+    // A circle of 1.5 m radius in the 10 x 5 m room at 0.375 m/s, odometry 10 % short; every
+    // 0.1 s one AoA per AP, 2° of noise, reported with σ 3°. From 20 s every AoA is 90° off.
+    const auto poseAt = [](double t, double radius = 1.5)
+    {
+        const double a = 0.25 * t;
+        return mrpt::math::TPose2D(5 + radius * std::sin(a), 2.5 - radius * std::cos(a), a);
+    };
+    const double t0 = 1.7e9, kBad_s = 20;
+    std::optional<mrpt::math::TPose2D> lastOffset;
+    bool withdrawn = false;
+    for (int i = 0; i <= 260 && !withdrawn; ++i)
+    {
+        const double t = 0.1 * i;
+        const auto truth = poseAt(t);
+        mrpt::obs::CObservationOdometry odo;
+        odo.timestamp = mrpt::Clock::fromDouble(t0 + t);
+        odo.odometry = mrpt::poses::CPose2D(poseAt(t, 1.35));  // 10 % short
+        loc.addOdometry(odo);
+        for (const auto& ap : aps)
+        {
+            auto b = CObservationWiFiBearing::Create();
+            b->timestamp = odo.timestamp;
+            b->transmitter = ap.mac;
+            b->aoa_rad = mrpt::math::wrapToPi(
+                localization::predictAoa(truth, ap.pose.x, ap.pose.y) +
+                mrpt::random::getRandomGenerator().drawGaussian1D(0, mrpt::DEG2RAD(2.0)) +
+                (t >= kBad_s ? M_PI / 2 : 0.0));
+            b->aoaStd_rad = mrpt::DEG2RAD(3.0);
+            loc.addBearing(b);
+        }
+        ASSERT_TRUE(loc.step());
+        const auto mean = loc.mean(), estimate = loc.estimate();
+        if (estimate.x != mean.x || estimate.y != mean.y)
+        {
+            ASSERT_LT(t, kBad_s + 1) << "the smoother explained bearings 90° off";
+            lastOffset.emplace(estimate.x - mean.x, estimate.y - mean.y, 0.0);
+        }
+        else
+            withdrawn = lastOffset && t >= kBad_s;
+    }
+    ASSERT_TRUE(lastOffset) << "the smoother never gave an estimate";
+    ASSERT_TRUE(withdrawn) << "the smoother still gives an estimate on bearings 90° off";
+    const double distance2 = lastOffset->x * lastOffset->x + lastOffset->y * lastOffset->y;
+    ASSERT_GT(distance2, 0.0);
+    const auto u = loc.uncertainty();
+    EXPECT_NEAR(u.reported(0, 0), u.particles(0, 0) + distance2, 1e-9 + 1e-6 * distance2);
+    EXPECT_NEAR(u.reported(1, 1), u.particles(1, 1) + distance2, 1e-9 + 1e-6 * distance2);
+    EXPECT_DOUBLE_EQ(u.reported(0, 1), u.particles(0, 1));
 }
 
 TEST(LiveDeviceMapper, OffUnlessAskedAndBadOptionsNameTheKey)

@@ -105,7 +105,8 @@ public:
          *  spread around the mean, wrapped). */
         mrpt::math::CMatrixDouble33 particles;
         /** The particles' spread about estimate() (`particles` plus the outer product of
-         *  estimate() − particlesMean), plus the transmitters' bearing bias
+         *  estimate() − particlesMean; while the smoother gives no estimate, plus the last
+         *  such offset it gave, in every direction), plus the transmitters' bearing bias
          *  (bearing_bias_std_deg): a converged cloud is as narrow as the bearings agree with
          *  each other, not as their common error. Alone its 95 % ellipse held 25-77 % of the
          *  errors after convergence with odometry (development rooms 1-10, live). */
@@ -160,6 +161,11 @@ private:
     std::optional<ParticleRecovery> recovery_;
     WindowSmoother smoother_{WindowSmootherOptions(), TransmitterMap()};
     std::optional<mrpt::math::TPose2D> smoothed_;
+    /** The smoother's estimate minus the particles' mean at the last step it gave one. When
+     *  it stops giving one, the mean is reported and its error is as large as this offset
+     *  showed, whatever the particles' spread: a narrow cloud can lag the robot. The robot
+     *  turns since, so the offset counts in every direction. */
+    std::optional<mrpt::math::TPose2D> lastSmootherOffset_;
     bool areaFromInitPdf_ = false;
     double lastStepTime_ = 0;
     size_t steps_ = 0;
