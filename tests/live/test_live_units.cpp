@@ -48,6 +48,19 @@ std::vector<mrpt::obs::CObservationOdometry::Ptr> collect(CWiFiOdometryUdpSensor
         out.push_back(std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(o));
     return out;
 }
+
+const std::string kLocalizationShare = MRPT_WIFI_SOURCE_DIR "/share/localization";
+
+/** wifi-localize-emulator.ini with its AP map found from anywhere. */
+mrpt::config::CConfigFileMemory emulatorLocalizationIni()
+{
+    mrpt::config::CConfigFileMemory ini(
+        mrpt::io::file_get_contents(kLocalizationShare + "/wifi-localize-emulator.ini"));
+    ini.write(
+        "MetricMap_wifiBearingMap_00_creationOpts", "transmitters_file",
+        kLocalizationShare + "/kidnapped-aps.yaml");
+    return ini;
+}
 }  // namespace
 
 TEST(OdometryDatagram, RoundTripsThroughTheSensorParser)
@@ -197,16 +210,11 @@ TEST(LiveLocalizer, TempersTheBearingsByTheMotionModelInUse)
 {
     // Without odometry [UnknownMotion]'s bearing_weight applies, from the first odometry
     // reading on [OdometryMotion]'s instead; both on top of the map's own.
-    const std::string share = MRPT_WIFI_SOURCE_DIR "/share/localization";
-    mrpt::config::CConfigFileMemory ini(
-        mrpt::io::file_get_contents(share + "/wifi-localize-emulator.ini"));
-    ini.write(
-        "MetricMap_wifiBearingMap_00_creationOpts", "transmitters_file",
-        share + "/kidnapped-aps.yaml");
+    auto ini = emulatorLocalizationIni();
     ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "bearing_weight", 0.8);
     ini.write("UnknownMotion", "bearing_weight", 0.5);
     ini.write("OdometryMotion", "bearing_weight", 0.3);
-    localization::LiveLocalizer loc(ini, share);
+    localization::LiveLocalizer loc(ini, kLocalizationShare);
     EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.5);
     mrpt::obs::CObservationOdometry odo;
     loc.addOdometry(odo);
@@ -221,12 +229,7 @@ TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
     // With odometry the smoother's estimate is reported while its solves are used; when they
     // stop, the particles' mean is, and how far it was last seen from the smoother's estimate
     // stays in the reported σ: a narrow cloud can lag the robot by more than its own spread.
-    const std::string share = MRPT_WIFI_SOURCE_DIR "/share/localization";
-    mrpt::config::CConfigFileMemory ini(
-        mrpt::io::file_get_contents(share + "/wifi-localize-emulator.ini"));
-    ini.write(
-        "MetricMap_wifiBearingMap_00_creationOpts", "transmitters_file",
-        share + "/kidnapped-aps.yaml");
+    auto ini = emulatorLocalizationIni();
     ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "use_aoa", true);
     ini.write("MetricMap_wifiBearingMap_00_likelihoodOpts", "use_aod", false);
     ini.write("wifi-localize", "bearing_bias_std_deg", 0.0);  // the particles' σ alone
@@ -236,7 +239,7 @@ TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
           {"KLD_options", "KLD_maxSampleSize"}})
         ini.write(section, key, 500);
     mrpt::random::getRandomGenerator().randomize(3);
-    localization::LiveLocalizer loc(ini, share);
+    localization::LiveLocalizer loc(ini, kLocalizationShare);
     const auto& aps = loc.wifiMap().transmitters().transmitters();
     ASSERT_GE(aps.size(), 3u);
 
