@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Re-runs one live run of a localization-accuracy room with another filter seed, as the
+# evaluator runs it (the room's recorded live .ini and scenario, rt-ac86u-emulator streaming in
+# real time on loopback, wifi-localize -d 40), and prints its median error after convergence
+# against the true poses (pf_rooms.py's figure; the estimate put on the simulation's clock with
+# the emulator's reported sim zero).
+#
+#   scripts/live_rerun.sh BUILD_DIR ROOM_DIR live-odometry|live-no-odometry SEED OUT_DIR
+#
+# ROOM_DIR is a room-N folder of `localization-accuracy -w DIR` (live runs not skipped). The
+# live run takes the drive's duration (40 s by default), so run one at a time.
+set -euo pipefail
+if [[ $# -ne 5 ]]; then
+    sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
+    exit 2
+fi
+build=$1 room=$2 run=$3 seed=$4 out=$5
+ini=$room/$run.ini
+[[ -f $ini ]] || { echo "live_rerun.sh: $ini: not found (a sweep run with --no-live?)" >&2; exit 2; }
+port=$(awk -F= '/^\[/{s=($0=="[WIFI_CSI]")} s && $1 ~ /^udp_port *$/ {gsub(/ /,"",$2); print $2}' "$ini")
+odoPort=$(awk -F= '/^\[/{s=($0=="[ODOMETRY]")} s && $1 ~ /^udp_port *$/ {gsub(/ /,"",$2); print $2}' "$ini")
+[[ -n $port ]] || { echo "live_rerun.sh: $ini: no [WIFI_CSI] udp_port" >&2; exit 2; }
+mkdir -p "$out"
+state=$(mktemp -d)
+trap 'rm -rf "$state"' EXIT
+emuArgs=(--port "$port" --dest 127.0.0.1 --state-dir "$state" --duration 50 --status-period 1
+    --scenario "$room/kidnapped/scenario.yaml" --preconfigured 155/80 -q)
+[[ $run == live-odometry && -n $odoPort ]] && emuArgs+=(--odometry-port "$odoPort")
+"$build/bin/rt-ac86u-emulator" "${emuArgs[@]}" >"$out/emulator.log" 2>&1 &
+emu=$!
+for _ in $(seq 200); do [[ -e $state/emulator.sock ]] && break; sleep 0.025; done
+status=0
+timeout 100 "$build/bin/wifi-localize" -p "$build/lib/libmrpt_wifi_sensor.so" "$ini" -q -o "$out" \
+    -d 40 --stop-when-idle 3 --seed "$seed" >"$out/wifi-localize.log" 2>&1 || status=$?
+kill "$emu" 2>/dev/null || true
+wait "$emu" 2>/dev/null || true
+if [[ $status -ne 0 ]]; then
+    echo "live_rerun.sh: wifi-localize exited $status (see $out/wifi-localize.log)" >&2
+    exit 1
+fi
+cp "$state/summary.json" "$out/"
+python3 - "$room" "$out" "$(dirname "$0")" <<'EOF'
+import os, re, sys
+room, out, scripts = sys.argv[1:]
+sys.path.insert(0, scripts)
+import pf_rooms
+m = re.search(r'"unix_time_at_sim_zero":\s*([0-9.]+)', open(os.path.join(out, "summary.json")).read())
+if not m:
+    sys.exit(f"live_rerun.sh: {out}/summary.json: no unix_time_at_sim_zero")
+truth = pf_rooms.read_tum(os.path.join(room, "kidnapped", "truth", "trajectory_tum.txt"))
+times, xy = pf_rooms.read_tum(os.path.join(out, "estimate_tum.txt"))
+times = [truth[0][0] + (t - float(m.group(1))) for t in times]
+median = pf_rooms.median_after_convergence((times, xy), truth)
+print(f"{os.path.basename(room)} {os.path.basename(out)}: median error after convergence "
+      + ("never converged" if median == float("inf") else f"{median:.2f} m"))
+EOF
