@@ -32,18 +32,10 @@ import re
 import statistics
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pf_rooms import read_tum  # noqa: E402
+
 CHI2_2DOF_95 = 5.991
-
-
-def read_tum(path):
-    times, xy = [], []
-    for line in open(path):
-        if line.startswith("#") or not line.strip():
-            continue
-        v = [float(x) for x in line.split()]
-        times.append(v[0])
-        xy.append((v[1], v[2]))
-    return times, xy
 
 
 def interpolate(track, t):
