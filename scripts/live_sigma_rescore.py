@@ -33,7 +33,7 @@ import statistics
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pf_rooms import read_tum  # noqa: E402
+from pf_rooms import converged_from, read_tum  # noqa: E402
 
 CHI2_2DOF_95 = 5.991
 
@@ -73,17 +73,12 @@ def rescore(room_dir, run):
 
     first = rows[0][0] - truth[0][0]
     offset = min((first + 0.05 * k for k in range(-100, 101)), key=median_error)
-    errors = [(r[0], error_at(r, offset)) for r in rows]
-    judged = [i for i, (_, e) in enumerate(errors) if e is not None]
-    converged, run_start = None, 0
-    for n, i in enumerate(judged):
-        if errors[i][1] >= 1.0:
-            run_start = n + 1
-        elif run_start < len(judged) and errors[i][0] - errors[judged[run_start]][0] >= 5.0:
-            converged = judged[run_start]
-            break
-    if converged is None:
+    errors = [error_at(r, offset) for r in rows]
+    judged = [i for i, e in enumerate(errors) if e is not None]
+    start = converged_from([rows[i][0] for i in judged], [errors[i] for i in judged])
+    if start is None:
         return None
+    converged = judged[start]
     poses = withdrawn = inside = inside_with_offset = 0
     last_offset = None
     for i, r in enumerate(rows):

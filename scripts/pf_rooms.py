@@ -148,13 +148,20 @@ def median_after_convergence(estimate, truth, threshold_m=1.0, hold_s=5.0):
         gy = txy[i - 1][1] + a * (txy[i][1] - txy[i - 1][1])
         times.append(t)
         errors.append(math.hypot(x - gx, y - gy))
+    start = converged_from(times, errors, threshold_m, hold_s)
+    return math.inf if start is None else statistics.median(errors[start:])
+
+
+def converged_from(times, errors, threshold_m=1.0, hold_s=5.0):
+    """Index from which the error stays below threshold_m for hold_s (the evaluator's
+    convergence), or None if it never does."""
     run = 0
     for i, e in enumerate(errors):
         if e >= threshold_m:
             run = i + 1
         elif times[i] - times[run] >= hold_s:
-            return statistics.median(errors[run:])
-    return math.inf
+            return run
+    return None
 
 
 def main():
