@@ -73,7 +73,8 @@ const Fixture& fixture()
 TEST(LocalizationAppsCli, HelpWorks)
 {
     for (const char* app :
-         {"wifi-pf-localization", "wifi-graphslam", "wifi-iot-map", "wifi-bearings-synth"})
+         {"wifi-pf-localization", "wifi-graphslam", "wifi-iot-map", "wifi-bearings-synth",
+          "live-replay"})
     {
         const auto r = run(kBin + "/" + app + " --help");
         EXPECT_EQ(r.rc, 0) << app << ": " << r.out;
@@ -423,6 +424,63 @@ TEST(LocalizationAppsPf, TimeToConvergeCountsFromTheKidnapping)
         for (size_t i = 0; i + 1 < steps; ++i) brokeOut |= e[i] >= thr;
         EXPECT_TRUE(brokeOut) << "an earlier start would have qualified";
     }
+}
+
+TEST(LocalizationAppsLiveReplay, SameInputSameRunAndALateStartNeverSeesTheBearingsBefore)
+{
+    // live-replay: wifi-localize's filter without the clock. What it is for: a run that can be
+    // repeated exactly, with the start and the bearings per step set on the command line.
+    const auto& f = fixture();
+    const std::string common = kBin + "/live-replay " + kIni + " -q -n 1000 -m " + f.dir +
+                               "/aps.yaml -b " + f.dir +
+                               "/bearings.csv --sensor-pose 0.1 0 0 0 0 0 --seed 3";
+    const auto first = run(common + " --bearings-per-step 2 -o " + f.dir + "/replay");
+    ASSERT_EQ(first.rc, 0) << first.out;
+    const auto again = run(common + " --bearings-per-step 2 -o " + f.dir + "/replay-again");
+    ASSERT_EQ(again.rc, 0) << again.out;
+    const std::string estimate = mrpt_wifi::test::readFile(f.dir + "/replay/estimate_tum.txt");
+    EXPECT_FALSE(estimate.empty());
+    EXPECT_EQ(estimate, mrpt_wifi::test::readFile(f.dir + "/replay-again/estimate_tum.txt"));
+    EXPECT_NE(
+        first.out.find(std::to_string(f.w.bearings.size()) + " bearings from 0 s"),
+        std::string::npos)
+        << first.out;
+
+    // It is the live filter, and it finds the robot: median error after 20 s, true poses.
+    const auto est = Trajectory2D::fromTumFile(f.dir + "/replay/estimate_tum.txt");
+    std::vector<double> errors;
+    for (size_t i = 0; i < est.size(); ++i)
+        if (mrpt::math::TPose2D truth;
+            est.t[i] >= est.t.front() + 20 && f.w.truth.interpolate(est.t[i], truth))
+            errors.push_back(std::hypot(est.poses[i].x - truth.x, est.poses[i].y - truth.y));
+    ASSERT_FALSE(errors.empty());
+    std::nth_element(errors.begin(), errors.begin() + long(errors.size() / 2), errors.end());
+    EXPECT_LT(errors[errors.size() / 2], 0.5);
+
+    // A late start: nothing before it reaches the filter.
+    const auto late = run(common + " --start 10 -o " + f.dir + "/replay-late");
+    ASSERT_EQ(late.rc, 0) << late.out;
+    const auto lateEst = Trajectory2D::fromTumFile(f.dir + "/replay-late/estimate_tum.txt");
+    ASSERT_FALSE(lateEst.empty());
+    double firstBearing = f.w.bearings.front().t;
+    for (const auto& b : f.w.bearings) firstBearing = std::min(firstBearing, b.t);
+    EXPECT_GE(lateEst.t.front(), firstBearing + 10);
+    const size_t before = size_t(std::count_if(
+        f.w.bearings.begin(), f.w.bearings.end(),
+        [&](const BearingRecord& b) { return b.t < firstBearing + 10; }));
+    EXPECT_NE(
+        late.out.find(std::to_string(f.w.bearings.size() - before) + " bearings from 10 s"),
+        std::string::npos)
+        << late.out;
+    // One bearing per step (the default) is one step per bearing, as offline.
+    EXPECT_NE(
+        late.out.find(std::to_string(f.w.bearings.size() - before) + " filter steps of 1"),
+        std::string::npos)
+        << late.out;
+
+    const auto bad = run(common + " --bearings-per-step 0 -o " + f.dir + "/replay-bad");
+    EXPECT_EQ(bad.rc, 1);
+    EXPECT_NE(bad.out.find("--bearings-per-step must be >= 1"), std::string::npos) << bad.out;
 }
 
 TEST(LocalizationAppsPf, IniWithoutTheMapIsAnError)

@@ -8,6 +8,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -71,5 +73,38 @@ private:
     TempDir dir_;
     pid_t pid_ = -1;
 };
+
+/** Whether a UDP socket of this machine is bound to `port` (any address; /proc/net/udp and
+ *  udp6), polled until `timeout`: a receiver is listening before the emulator streams to it. */
+inline bool waitForUdpListener(uint16_t port, std::chrono::milliseconds timeout)
+{
+    const auto bound = [port]
+    {
+        for (const char* table : {"/proc/net/udp", "/proc/net/udp6"})
+        {
+            std::ifstream f(table);
+            std::string line;
+            std::getline(f, line);  // header
+            while (std::getline(f, line))
+            {
+                std::istringstream row(line);
+                std::string slot, local;
+                row >> slot >> local;  // "0100007F:5C1E": the port in hex after the colon
+                const auto colon = local.rfind(':');
+                if (colon != std::string::npos &&
+                    std::stoul(local.substr(colon + 1), nullptr, 16) == port)
+                    return true;
+            }
+        }
+        return false;
+    };
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!bound())
+    {
+        if (std::chrono::steady_clock::now() >= deadline) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    return true;
+}
 
 }  // namespace mrpt_wifi::test
