@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Re-runs one live run of a localization-accuracy room with another filter seed, as the
-# evaluator runs it (the room's recorded live .ini and scenario, rt-ac86u-emulator streaming in
-# real time on loopback, wifi-localize -d 40), and prints its median error after convergence
+# evaluator runs it (the room's recorded live .ini and scenario; wifi-localize started first and
+# rt-ac86u-emulator, once it listens, streaming in real time on loopback, so the run gets the
+# drive from its first frame), and prints its median error after convergence
 # against the true poses (pf_rooms.py's figure; the estimate put on the simulation's clock with
 # the emulator's reported sim zero).
 #
@@ -26,12 +27,20 @@ trap 'rm -rf "$state"' EXIT
 emuArgs=(--port "$port" --dest 127.0.0.1 --state-dir "$state" --duration 50 --status-period 1
     --scenario "$room/kidnapped/scenario.yaml" --preconfigured 155/80 -q)
 [[ $run == live-odometry && -n $odoPort ]] && emuArgs+=(--odometry-port "$odoPort")
+timeout 130 "$build/bin/wifi-localize" -p "$build/lib/libmrpt_wifi_sensor.so" "$ini" -q -o "$out" \
+    -d 70 --stop-when-idle 3 --seed "$seed" >"$out/wifi-localize.log" 2>&1 &
+live=$!
+# Bound to its UDP port (/proc/net/udp: local address hex IP:PORT) before the stream starts.
+hexPort=$(printf ':%04X ' "$port")
+for _ in $(seq 1200); do
+    grep -q "$hexPort" /proc/net/udp /proc/net/udp6 2>/dev/null && break
+    kill -0 "$live" 2>/dev/null || break
+    sleep 0.025
+done
 "$build/bin/rt-ac86u-emulator" "${emuArgs[@]}" >"$out/emulator.log" 2>&1 &
 emu=$!
-for _ in $(seq 200); do [[ -e $state/emulator.sock ]] && break; sleep 0.025; done
 status=0
-timeout 100 "$build/bin/wifi-localize" -p "$build/lib/libmrpt_wifi_sensor.so" "$ini" -q -o "$out" \
-    -d 40 --stop-when-idle 3 --seed "$seed" >"$out/wifi-localize.log" 2>&1 || status=$?
+wait "$live" || status=$?
 kill "$emu" 2>/dev/null || true
 wait "$emu" 2>/dev/null || true
 if [[ $status -ne 0 ]]; then

@@ -547,7 +547,7 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
         if (odo == 0) emuArgs.insert(emuArgs.end(), {"--odometry-port", std::to_string(odoPort)});
         // wifi-localize first, and the emulator only once it listens: the live run then gets
         // the drive from its first frame, as the offline run does. Started after the emulator,
-        // it missed the first 0.4-0.8 s, and a filter without odometry that starts later can
+        // it missed the first 0.35-0.55 s, and a filter without odometry that starts later can
         // settle on another track (development room 39, fed two bearings per step: from the
         // first frame 0 of 6 filter seeds lost the robot, from where a live run started 5 of
         // 6), so the live/offline ratio compared two different runs.

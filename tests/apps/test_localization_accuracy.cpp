@@ -86,7 +86,7 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // Both kinds of run get the drive from its first frame (the emulator streams once
     // wifi-localize listens), so live and offline are compared on the same bearings. The
     // first frame is a few ms into the drive; a live run started after the stream had begun
-    // missed 0.4-0.8 s of it.
+    // missed 0.35-0.55 s of it.
     for (const char* run : {"offline_odo", "offline_noodo", "live_odo", "live_noodo"})
         EXPECT_LT(number(room, std::string(run) + "_start_s"), 0.1) << run << "\n" << r.output;
     // The live filter's reported uncertainty is judged against its error once it converged
