@@ -251,17 +251,25 @@ struct Room
 const char* kRunNames[2][2] = {
     {"offline, odometry", "offline, no odometry"}, {"live, odometry", "live, no odometry"}};
 
-/** Runs a program of the build; throws with its output when it fails. */
+/** A program that failed: named in the room's errors, printed with its command and the end
+ *  of its output. */
+void reportFailure(
+    Room& room, const std::string& what, const std::string& problem, const std::string& cmd,
+    const std::string& output)
+{
+    room.errors.push_back(what);
+    std::cerr << "\n[localization-accuracy] room " << room.seed << ": " << what << " " << problem
+              << ":\n  " << cmd << "\n"
+              << output.substr(output.size() > 2000 ? output.size() - 2000 : 0) << "\n";
+}
+
+/** Runs a program of the build; a failure goes to reportFailure(), the room goes on. */
 test::CommandResult runOrThrow(const std::string& cmd, Room& room, const std::string& what)
 {
     auto r = test::run(cmd);
     if (r.exitCode != 0)
-    {
-        room.errors.push_back(what);
-        std::cerr << "\n[localization-accuracy] room " << room.seed << ": " << what
-                  << " failed (exit " << r.exitCode << "):\n  " << cmd << "\n"
-                  << r.output.substr(r.output.size() > 2000 ? r.output.size() - 2000 : 0) << "\n";
-    }
+        reportFailure(
+            room, what, "failed (exit " + std::to_string(r.exitCode) + ")", cmd, r.output);
     return r;
 }
 
@@ -583,16 +591,14 @@ void runLive(Room& room, const fs::path& dir, const fs::path& calib, const Optio
         const std::string what = std::string("wifi-localize (") + kRunNames[1][odo] + ")";
         if (!listening || r.exitCode != 0)
         {
-            room.errors.push_back(what);
-            std::cerr << "\n[localization-accuracy] room " << room.seed << ": " << what
-                      << (listening ? " failed (exit " + std::to_string(r.exitCode) + ")"
-                                    : " never listened on its UDP ports")
-                      << ":\n  " << liveCommand << "\n"
-                      << r.output.substr(r.output.size() > 2000 ? r.output.size() - 2000 : 0)
-                      << "\n";
+            reportFailure(
+                room, what,
+                listening ? "failed (exit " + std::to_string(r.exitCode) + ")"
+                          : "never listened on its UDP ports",
+                liveCommand, r.output);
             continue;
         }
-        if (r.exitCode != 0 || !std::isfinite(simZero) || !fs::exists(out / "estimate_tum.txt") ||
+        if (!std::isfinite(simZero) || !fs::exists(out / "estimate_tum.txt") ||
             fs::file_size(out / "estimate_tum.txt") == 0)
             continue;
         // The live estimate is on the receiver's clock: put it on the simulation's.
