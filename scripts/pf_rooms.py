@@ -2,7 +2,7 @@
 """Re-runs the kidnapped-robot filter of localization-accuracy's rooms with .ini changes.
 
   python3 scripts/pf_rooms.py BUILD_DIR SWEEP_WORK OUT_DIR odometry|none [--seeds 1,2,3]
-                              [--rooms 1,2] [--jobs 2] [--aps N] [--start S] [--live-steps N]
+                              [--rooms 1,2] [--jobs 2] [--aps N] [--skip S] [--live-steps N]
                               [Section/key=value ...]
 
 SWEEP_WORK is a `localization-accuracy -w DIR` folder (its room-N/pf.ini and the recorded
@@ -24,8 +24,8 @@ the room's drive simulated again (wifi-sim is deterministic) and estimated with 
 --odometry-bearings takes kidnapped/bearings.csv instead (windows chosen with the odometry: how
 sweeps before 2026-11-27 ran without odometry).
 
---start S starts the filter S seconds into the drive (the bearings before it dropped), as a live
-run that came up late. --live-steps N (without odometry) runs wifi-localize's filter instead,
+--skip S starts the filter S seconds into the drive (the bearings before it dropped, both
+programs' --skip), as a live run that came up late. --live-steps N (without odometry) runs wifi-localize's filter instead,
 live-replay on the same bearings with N per step and the room's live-no-odometry.ini (a sweep run
 with its live runs): a live run without the clock.
 """
@@ -97,18 +97,6 @@ def keep_first_aps(truth_dir, bearings_csv, count, out):
                     len(fields) > 1 and fields[1].lower() in macs):
                 f.write(line)
     return aps, csv
-
-
-def drop_before(bearings_csv, start_s, out_csv):
-    """The bearings from start_s seconds after the first one on (a filter that started late)."""
-    with open(bearings_csv) as src:
-        lines = src.read().splitlines(keepends=True)
-    rows = [l for l in lines if not l.startswith(("#", "timestamp")) and l.strip()]
-    t0 = min(float(l.split(",", 1)[0]) for l in rows) + start_s
-    with open(out_csv, "w") as f:
-        f.writelines(l for l in lines if l.startswith(("#", "timestamp")) or not l.strip()
-                     or float(l.split(",", 1)[0]) >= t0)
-    return out_csv
 
 
 def no_odometry_bearings(build, room_dir):
@@ -194,7 +182,7 @@ def main():
     p.add_argument("--aps", type=int, default=0, help="keep the first N access points only")
     p.add_argument("--odometry-bearings", action="store_true",
                    help="without odometry, the bearings estimated with it (kidnapped/bearings.csv)")
-    p.add_argument("--start", type=float, default=0.0,
+    p.add_argument("--skip", type=float, default=0.0,
                    help="start the filter this many seconds into the drive")
     p.add_argument("--live-steps", type=int, default=0,
                    help="wifi-localize's filter (live-replay), N bearings per step")
@@ -203,8 +191,8 @@ def main():
     if a.live_steps and a.motion != "none":
         print("pf_rooms.py: --live-steps runs without odometry only (motion: none)", file=sys.stderr)
         return 2
-    if a.live_steps < 0 or a.start < 0:
-        print("pf_rooms.py: --live-steps and --start must be >= 0", file=sys.stderr)
+    if a.live_steps < 0 or a.skip < 0:
+        print("pf_rooms.py: --live-steps and --skip must be >= 0", file=sys.stderr)
         return 2
     program = os.path.join(a.build, "bin", "live-replay" if a.live_steps else "wifi-pf-localization")
     if not os.access(program, os.X_OK):
@@ -237,21 +225,17 @@ def main():
             bearings = os.path.join(src, "kidnapped", "bearings-no-odometry.csv")
         if a.aps:
             aps, bearings = keep_first_aps(truth, bearings, a.aps, out)
-        sensor_pose = ["--sensor-pose", "0.1", "0", "0.4", "0", "0", "0"]
         if a.live_steps:
             live_ini = os.path.join(src, "live-no-odometry.ini")
             if not os.path.exists(live_ini):
                 return room, seed, None, [f"{live_ini}: not found (a sweep run with --no-live?)"]
             ini = os.path.join(out, "live.ini")
             derive_ini(live_ini, ini, a.overrides)
-            cmd = [program, ini, "-q", "--seed", str(seed), "-n", "3000", "-m", aps, "-b", bearings,
-                   "--bearings-per-step", str(a.live_steps), "--start", str(a.start),
-                   *sensor_pose, "-o", out]
+            cmd = [program, ini, "-q", "--bearings-per-step", str(a.live_steps)]
         else:
-            if a.start > 0:
-                bearings = drop_before(bearings, a.start, os.path.join(out, "bearings-from-start.csv"))
-            cmd = [program, ini, "-q", "--no-plots", "--seed", str(seed), "-n", "3000", "-m", aps,
-                   "-b", bearings, *sensor_pose, "-o", out]
+            cmd = [program, ini, "-q", "--no-plots"]
+        cmd += ["--seed", str(seed), "-n", "3000", "-m", aps, "-b", bearings, "--skip", str(a.skip),
+                "--sensor-pose", "0.1", "0", "0.4", "0", "0", "0", "-o", out]
         if a.motion == "odometry":
             cmd += ["--odometry-tum", os.path.join(truth, "odometry_tum.txt")]
         r = subprocess.run(cmd, capture_output=True, text=True)

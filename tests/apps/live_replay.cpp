@@ -34,7 +34,7 @@ int main(int argc, char** argv)
         {
             TCLAP::CmdLine cmd(
                 "wifi-localize's filter (LiveLocalizer) on a bearings CSV, without the clock: "
-                "N bearings per filter step, from --start seconds into the drive, the same run "
+                "N bearings per filter step, from --skip seconds into the drive, the same run "
                 "for the same input, .ini and seed. Without odometry. Writes estimate_tum.txt "
                 "(the reported pose) and pf_estimate_tum.txt (the particles' mean) to the "
                 "output folder, one line per step.",
@@ -61,10 +61,10 @@ int main(int argc, char** argv)
                 "Bearings per filter step (1: one step per bearing, as wifi-pf-localization; a "
                 "live run takes what the clock queued, often 1-3 and up to tens)",
                 false, 1, "N", cmd);
-            TCLAP::ValueArg<double> argStart(
-                "", "start",
-                "Seconds into the drive (after the first bearing) at which the filter starts; "
-                "the bearings before are dropped, as a live run started late never sees them",
+            TCLAP::ValueArg<double> argSkip(
+                "", "skip",
+                "Drop the first S seconds of bearings, as wifi-pf-localization --skip: the filter "
+                "starts there, as a live run that came up late",
                 false, 0.0, "S", cmd);
             TCLAP::ValueArg<unsigned> argSeed(
                 "", "seed", "Seed of the particle filter's random numbers", false, 1, "N", cmd);
@@ -75,7 +75,7 @@ int main(int argc, char** argv)
                 return rc;
             if (argPerStep.getValue() == 0)
                 throw std::invalid_argument("--bearings-per-step must be >= 1");
-            if (!(argStart.getValue() >= 0)) throw std::invalid_argument("--start must be >= 0");
+            if (!(argSkip.getValue() >= 0)) throw std::invalid_argument("--skip must be >= 0");
 
             const std::string iniPath = argIni.getValue();
             if (!mrpt::system::fileExists(iniPath))
@@ -100,7 +100,7 @@ int main(int argc, char** argv)
                 [](const BearingRecord& a, const BearingRecord& b) { return a.t < b.t; });
             if (bearings.empty())
                 throw std::runtime_error("'" + argCsv.getValue() + "': no bearings");
-            const double t0 = bearings.front().t + argStart.getValue();
+            const double t0 = bearings.front().t + argSkip.getValue();
             bearings.erase(
                 bearings.begin(), std::find_if(
                                       bearings.begin(), bearings.end(),
@@ -132,7 +132,7 @@ int main(int argc, char** argv)
             }
             progress.done();
             std::cout << "live-replay: " << loc.bearingsUsed() << " bearings from "
-                      << argStart.getValue()
+                      << argSkip.getValue()
                       << " s (unknown transmitter: " << loc.unknownTransmitter() << "), "
                       << loc.steps() << " filter steps of " << argPerStep.getValue() << ", "
                       << loc.particles().size() << " particles, seed " << argSeed.getValue() << ": "

@@ -458,7 +458,7 @@ TEST(LocalizationAppsLiveReplay, SameInputSameRunAndALateStartNeverSeesTheBearin
     EXPECT_LT(errors[errors.size() / 2], 0.5);
 
     // A late start: nothing before it reaches the filter.
-    const auto late = run(common + " --start 10 -o " + f.dir + "/replay-late");
+    const auto late = run(common + " --skip 10 -o " + f.dir + "/replay-late");
     ASSERT_EQ(late.rc, 0) << late.out;
     const auto lateEst = Trajectory2D::fromTumFile(f.dir + "/replay-late/estimate_tum.txt");
     ASSERT_FALSE(lateEst.empty());
