@@ -26,8 +26,10 @@ sweeps before 2026-11-27 ran without odometry).
 
 --skip S starts the filter S seconds into the drive (the bearings before it dropped, both
 programs' --skip), as a live run that came up late. --live-steps N (without odometry) runs wifi-localize's filter instead,
-live-replay on the same bearings with N per step and the room's live-no-odometry.ini (a sweep run
-with its live runs): a live run without the clock.
+live-replay on the same bearings, N queued at a time, with the room's live-no-odometry.ini (a sweep
+run with its live runs): a live run without the clock. The .ini's [wifi-localize]
+max_bearings_per_step splits each N further, as live (sweeps before 2026-11-28: 0, one step of N;
+give wifi-localize/max_bearings_per_step=2 for today's).
 """
 import argparse
 import bisect
@@ -185,7 +187,7 @@ def main():
     p.add_argument("--skip", type=float, default=0.0,
                    help="start the filter this many seconds into the drive")
     p.add_argument("--live-steps", type=int, default=0,
-                   help="wifi-localize's filter (live-replay), N bearings per step")
+                   help="wifi-localize's filter (live-replay), N bearings queued at a time")
     p.add_argument("overrides", nargs="*", help="Section/key=value")
     a = p.parse_intermixed_args()
     if a.live_steps and a.motion != "none":

@@ -728,7 +728,7 @@ int main(int argc, char** argv)
                 const auto stepStart = Clock::now();
                 while (loc.pendingBearings() > 0 &&
                        Clock::now() - stepStart < std::chrono::milliseconds(50))
-                    stepped = loc.step() || stepped;
+                    stepped = loc.step(nowUnix()) || stepped;
                 lastOutput = Clock::now();
                 if (!stepped) return false;
                 const auto m = loc.estimate();
@@ -967,7 +967,13 @@ int main(int argc, char** argv)
             sum << "  bearings used  : " << loc.bearingsUsed()
                 << " (unknown transmitter: " << loc.unknownTransmitter()
                 << "; with an angle the map weighs: " << loc.bearingsWeighed() << ")\n"
-                << "  filter steps   : " << loc.steps() << "\n"
+                << "  filter steps   : " << loc.steps() << " ("
+                << (loc.options().maxBearingsPerStep == 0
+                        ? std::string("all queued bearings per step")
+                        : "up to " + std::to_string(loc.options().maxBearingsPerStep) +
+                              " bearings per step, more when queued over " +
+                              fmt(loc.options().maxQueue_s, 2) + " s")
+                << ")\n"
                 << "  pose outputs   : " << poseOutputs << " ("
                 << fmt(double(poseOutputs) / active, 1) << " /s while data flowed)\n"
                 << "  lag [ms]       : p50 " << fmt(percentile(lags, 0.5) * 1e3, 1) << ", p99 "

@@ -92,6 +92,9 @@ void LiveLocalizerOptions::loadFromConfigFile(
     if (maxPerStep < 0)
         throw std::invalid_argument("[" + s + "] max_bearings_per_step must be >= 0");
     maxBearingsPerStep = size_t(maxPerStep);
+    maxQueue_s = c.read_double(s, "max_queue_s", maxQueue_s);
+    if (!(maxQueue_s >= 0) || !std::isfinite(maxQueue_s))
+        throw std::invalid_argument("[" + s + "] max_queue_s must be >= 0");
     bearingBiasStd_deg = c.read_double(s, "bearing_bias_std_deg", bearingBiasStd_deg);
     if (!(bearingBiasStd_deg >= 0) || !std::isfinite(bearingBiasStd_deg))
         throw std::invalid_argument("[" + s + "] bearing_bias_std_deg must be >= 0");
@@ -168,15 +171,22 @@ void LiveLocalizer::addBearing(const CObservationWiFiBearing::Ptr& b)
     pending_.push_back(b);
 }
 
-bool LiveLocalizer::step()
+bool LiveLocalizer::step(std::optional<double> now_s)
 {
     if (pending_.empty()) return false;
     std::stable_sort(
         pending_.begin(), pending_.end(),
         [](const auto& a, const auto& b) { return a->timestamp < b->timestamp; });
-    const size_t n = opts_.maxBearingsPerStep == 0
-                         ? pending_.size()
-                         : std::min(pending_.size(), opts_.maxBearingsPerStep);
+    size_t n = pending_.size();
+    if (opts_.maxBearingsPerStep > 0)
+    {
+        const double newest = mrpt::Clock::toDouble(pending_.back()->timestamp);
+        const double overdueBefore = std::max(newest, now_s.value_or(newest)) - opts_.maxQueue_s;
+        const auto firstInTime = std::find_if(
+            pending_.begin(), pending_.end(),
+            [&](const auto& b) { return mrpt::Clock::toDouble(b->timestamp) >= overdueBefore; });
+        n = std::min(n, std::max(opts_.maxBearingsPerStep, size_t(firstInTime - pending_.begin())));
+    }
     mrpt::obs::CSensoryFrame sf;
     for (size_t i = 0; i < n; ++i) sf.insert(pending_[i]);
     const double t = mrpt::Clock::toDouble(pending_[n - 1]->timestamp);

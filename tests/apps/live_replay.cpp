@@ -58,8 +58,10 @@ int main(int argc, char** argv)
                 "n", "particles", "Overrides particles_count of the .ini", false, 0, "N", cmd);
             TCLAP::ValueArg<unsigned> argPerStep(
                 "", "bearings-per-step",
-                "Bearings per filter step (1: one step per bearing, as wifi-pf-localization; a "
-                "live run takes what the clock queued, often 1-3 and up to tens)",
+                "Bearings queued at once, one filter step (1: one step per bearing, as "
+                "wifi-pf-localization; a live run takes what the clock queued, often 1-3 and up "
+                "to tens); a smaller [wifi-localize] max_bearings_per_step splits them further, "
+                "as in wifi-localize",
                 false, 1, "N", cmd);
             TCLAP::ValueArg<double> argSkip(
                 "", "skip",
@@ -121,22 +123,26 @@ int main(int argc, char** argv)
                 loc.addBearing(observationFromRecord(bearings[i]));
                 if (loc.pendingBearings() < argPerStep.getValue() && i + 1 < bearings.size())
                     continue;
-                if (!loc.step()) continue;
-                // As wifi-localize: a step whose newest bearing is not newer gives no line.
-                const double t = loc.lastStepTime();
-                if (!(t > lastOutput)) continue;
-                lastOutput = t;
-                tum << Trajectory2D::tumLine(t, loc.estimate());
-                pfTum << Trajectory2D::tumLine(t, loc.mean());
+                // The queue drained as wifi-localize drains it: steps of the .ini's
+                // max_bearings_per_step (0: all at once).
+                while (loc.step())
+                {
+                    // As wifi-localize: a step whose newest bearing is not newer gives no line.
+                    const double t = loc.lastStepTime();
+                    if (!(t > lastOutput)) continue;
+                    lastOutput = t;
+                    tum << Trajectory2D::tumLine(t, loc.estimate());
+                    pfTum << Trajectory2D::tumLine(t, loc.mean());
+                }
                 progress.update(double(i + 1) / double(bearings.size()));
             }
             progress.done();
             std::cout << "live-replay: " << loc.bearingsUsed() << " bearings from "
                       << argSkip.getValue()
                       << " s (unknown transmitter: " << loc.unknownTransmitter() << "), "
-                      << loc.steps() << " filter steps of " << argPerStep.getValue() << ", "
-                      << loc.particles().size() << " particles, seed " << argSeed.getValue() << ": "
-                      << outDir << "/estimate_tum.txt\n";
+                      << loc.steps() << " filter steps, queued " << argPerStep.getValue()
+                      << " at a time, " << loc.particles().size() << " particles, seed "
+                      << argSeed.getValue() << ": " << outDir << "/estimate_tum.txt\n";
             return 0;
         });
 }

@@ -474,7 +474,8 @@ TEST(LocalizationAppsLiveReplay, SameInputSameRunAndALateStartNeverSeesTheBearin
         << late.out;
     // One bearing per step (the default) is one step per bearing, as offline.
     EXPECT_NE(
-        late.out.find(std::to_string(f.w.bearings.size() - before) + " filter steps of 1"),
+        late.out.find(
+            std::to_string(f.w.bearings.size() - before) + " filter steps, queued 1 at a time"),
         std::string::npos)
         << late.out;
 

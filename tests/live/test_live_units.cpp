@@ -224,6 +224,54 @@ TEST(LiveLocalizer, TempersTheBearingsByTheMotionModelInUse)
     EXPECT_DOUBLE_EQ(loc.wifiMap().likelihoodOptions.bearingWeight, 0.8 * 0.3);
 }
 
+TEST(LiveLocalizer, StepsTakeTheCapAndCatchUpWithWhatIsQueuedTooLong)
+{
+    // max_bearings_per_step bounds a step; what is more than max_queue_s older than the newest
+    // bearing, or than the clock's now, goes into the next step beyond it: a late filter
+    // catches up.
+    auto ini = emulatorLocalizationIni();
+    ini.write("wifi-localize", "max_bearings_per_step", 2);
+    ini.write("wifi-localize", "max_queue_s", 0.51);
+    ini.write("LocalizationExperiment", "particles_count", 200);
+    localization::LiveLocalizer loc(ini, kLocalizationShare);
+    const auto& ap = loc.wifiMap().transmitters().transmitters().at(0);
+    const auto bearingAt = [&](double t)
+    {
+        auto b = CObservationWiFiBearing::Create();
+        b->timestamp = mrpt::Clock::fromDouble(1.7e9 + t);
+        b->transmitter = ap.mac;
+        b->aoa_rad = 0.3;
+        b->aoaStd_rad = mrpt::DEG2RAD(3.0);
+        return b;
+    };
+    // 100 bearings 0.02 s apart, queued in reverse order: t = 0 ... 1.98 s.
+    for (int i = 99; i >= 0; --i) loc.addBearing(bearingAt(0.02 * i));
+    ASSERT_TRUE(loc.step());
+    // Older than 1.98 - 0.51 s: t = 0 ... 1.46 s, 74 bearings, in one step, oldest first.
+    EXPECT_EQ(loc.bearingsUsed(), 74u);
+    EXPECT_NEAR(loc.lastStepTime(), 1.7e9 + 1.46, 1e-5);
+    size_t steps = 1;
+    while (loc.step()) ++steps;
+    EXPECT_EQ(steps, 1u + 13u);  // the other 26 two at a time
+    EXPECT_EQ(loc.bearingsUsed(), 100u);
+    EXPECT_NEAR(loc.lastStepTime(), 1.7e9 + 1.98, 1e-5);
+
+    // A queue that spans less than max_queue_s: two per step.
+    for (int i = 0; i < 5; ++i) loc.addBearing(bearingAt(2.0 + 0.02 * i));
+    ASSERT_TRUE(loc.step());
+    EXPECT_EQ(loc.bearingsUsed(), 102u);
+    // Unless the clock says they are all late (the CSI before them was): all in one step.
+    ASSERT_TRUE(loc.step(1.7e9 + 2.5));
+    EXPECT_EQ(loc.bearingsUsed(), 104u);  // 2.04 and 2.06 s: not older than 2.5 - 0.51 s
+    for (int i = 0; i < 5; ++i) loc.addBearing(bearingAt(2.1 + 0.02 * i));
+    ASSERT_TRUE(loc.step(1.7e9 + 3.0));
+    EXPECT_EQ(loc.bearingsUsed(), 110u);
+    EXPECT_FALSE(loc.step(1.7e9 + 3.0));
+
+    ini.write("wifi-localize", "max_queue_s", -1.0);
+    EXPECT_THROW(localization::LiveLocalizer(ini, kLocalizationShare), std::invalid_argument);
+}
+
 TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
 {
     // With odometry the smoother's estimate is reported while its solves are used; when they
@@ -274,6 +322,8 @@ TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
             loc.addBearing(b);
         }
         ASSERT_TRUE(loc.step());
+        while (loc.step())  // the queue drained, as wifi-localize drains it
+            ;
         const auto mean = loc.mean(), estimate = loc.estimate();
         if (estimate.x != mean.x || estimate.y != mean.y)
         {

@@ -351,6 +351,14 @@ TEST(WifiLocalize, UsesTheCsiSensorsOwnLiveBearings)
     ASSERT_TRUE(std::regex_search(r.result.output, m, std::regex("bearings used  : ([0-9]+)")))
         << r.result.output;
     EXPECT_GT(std::stoul(m[1]), 1000u) << r.result.output;  // ~4 x 100 per second
+    // The shipped step cap, and what it says: no step holds more unless the queue is late.
+    std::smatch steps;
+    ASSERT_TRUE(std::regex_search(
+        r.result.output, steps,
+        std::regex(R"(filter steps   : ([0-9]+) \(up to 2 bearings per step, more when queued )"
+                   R"(over 0.25 s\))")))
+        << r.result.output;
+    EXPECT_LE(std::stoul(steps[1]), std::stoul(m[1]));
     const auto e = errorsOf(r.estimate, r.truth, 5.0);
     ASSERT_GT(e.afterWarmup.size(), 20u) << r.result.output;
     EXPECT_LE(median(e.afterWarmup), 0.5) << r.result.output;
