@@ -76,14 +76,14 @@ struct LiveLocalizerOptions
  *  Configured from the same .ini as pf-localization / wifi-pf-localization
  *  ([LocalizationExperiment] particles_count and init_PDF_* (mode 1), [PF_options],
  *  [KLD_options], [DummyOdometryParams], [MetricMap]). Odometry readings accumulate; each
- *  step() takes the bearings queued since the last one (up to max_bearings_per_step) as one
- *  sensory frame, with the odometry increment since the last step as the action (the
- *  `[OdometryMotion]` model if the file has that section, else MRPT's Gaussian model with the
- *  DummyOdometryParams floor, as MRPT's app does), or, while no odometry has been
- *  seen, the `[UnknownMotion]` model around the constant-velocity prediction from this filter's
- *  own estimates; either way `[ParticleRecovery]` re-seeds particles while the bearings disagree
- *  with the estimate: the same models as wifi-pf-localization. The map's area is the init_PDF
- *  box unless its creationOpts set one. Not thread-safe. */
+ *  step() takes the oldest bearings queued (up to max_bearings_per_step, more when they are
+ *  over max_queue_s late) as one sensory frame, with the odometry increment since the last
+ *  step as the action (the `[OdometryMotion]` model if the file has that section, else
+ *  MRPT's Gaussian model with the DummyOdometryParams floor, as MRPT's app does), or, while no
+ *  odometry has been seen, the `[UnknownMotion]` model around the constant-velocity prediction
+ *  from this filter's own estimates; either way `[ParticleRecovery]` re-seeds particles while
+ *  the bearings disagree with the estimate: the same models as wifi-pf-localization. The map's
+ *  area is the init_PDF box unless its creationOpts set one. Not thread-safe. */
 class LiveLocalizer
 {
 public:
