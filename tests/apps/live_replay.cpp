@@ -58,10 +58,10 @@ int main(int argc, char** argv)
                 "n", "particles", "Overrides particles_count of the .ini", false, 0, "N", cmd);
             TCLAP::ValueArg<unsigned> argPerStep(
                 "", "bearings-per-step",
-                "Bearings queued at once, one filter step (1: one step per bearing, as "
-                "wifi-pf-localization; a live run takes what the clock queued, often 1-3 and up "
-                "to tens); a smaller [wifi-localize] max_bearings_per_step splits them further, "
-                "as in wifi-localize",
+                "Bearings queued at a time (1: one step per bearing, as wifi-pf-localization; a "
+                "live run gets what the clock queued, often 1-3 and up to tens after a smoother "
+                "solve); the .ini's [wifi-localize] max_bearings_per_step splits them into "
+                "steps, as in wifi-localize (0: one step)",
                 false, 1, "N", cmd);
             TCLAP::ValueArg<double> argSkip(
                 "", "skip",

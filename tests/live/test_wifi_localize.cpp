@@ -351,7 +351,7 @@ TEST(WifiLocalize, UsesTheCsiSensorsOwnLiveBearings)
     ASSERT_TRUE(std::regex_search(r.result.output, m, std::regex("bearings used  : ([0-9]+)")))
         << r.result.output;
     EXPECT_GT(std::stoul(m[1]), 1000u) << r.result.output;  // ~4 x 100 per second
-    // The shipped step cap, and what it says: no step holds more unless the queue is late.
+    // The summary names the shipped step cap and its catch-up.
     std::smatch steps;
     ASSERT_TRUE(std::regex_search(
         r.result.output, steps,
