@@ -25,11 +25,11 @@ the room's drive simulated again (wifi-sim is deterministic) and estimated with 
 sweeps before 2026-11-27 ran without odometry).
 
 --skip S starts the filter S seconds into the drive (the bearings before it dropped, both
-programs' --skip), as a live run that came up late. --live-steps N (without odometry) runs wifi-localize's filter instead,
-live-replay on the same bearings, N queued at a time, with the room's live-no-odometry.ini (a sweep
-run with its live runs): a live run without the clock. The .ini's [wifi-localize]
-max_bearings_per_step splits each N further, as live (sweeps before 2026-11-28: 0, one step of N;
-give wifi-localize/max_bearings_per_step=2 for today's).
+programs' --skip), as a live run that came up late. --live-steps N (without odometry) runs
+wifi-localize's filter instead, live-replay on the same bearings, N queued at a time, with the
+room's live-no-odometry.ini (a sweep run with its live runs): a live run without the clock. The
+.ini's [wifi-localize] max_bearings_per_step splits each N further, as live (sweeps before
+2026-11-28: 0, one step of N; give wifi-localize/max_bearings_per_step=2 for today's).
 """
 import argparse
 import bisect

@@ -34,10 +34,11 @@ int main(int argc, char** argv)
         {
             TCLAP::CmdLine cmd(
                 "wifi-localize's filter (LiveLocalizer) on a bearings CSV, without the clock: "
-                "N bearings per filter step, from --skip seconds into the drive, the same run "
-                "for the same input, .ini and seed. Without odometry. Writes estimate_tum.txt "
-                "(the reported pose) and pf_estimate_tum.txt (the particles' mean) to the "
-                "output folder, one line per step.",
+                "N bearings queued at a time, in steps of the .ini's max_bearings_per_step, from "
+                "--skip seconds into the drive, the same run for the same input, .ini and seed. "
+                "Without odometry. Writes estimate_tum.txt (the reported pose) and "
+                "pf_estimate_tum.txt (the particles' mean) to the output folder, one line per "
+                "step.",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIni(
                 "config", "wifi-localize .ini (its localization sections are read)", true, "",
