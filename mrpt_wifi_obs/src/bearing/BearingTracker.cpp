@@ -33,6 +33,17 @@ BearingTracker::Decision BearingTracker::update(
                          pose.has_value() != tr.pose.has_value();
     const double sd = std::clamp(std_rad, opts_.minStd_rad, opts_.maxStd_rad);
     const double z0 = toTrack(candidates[0].theta_rad);
+    // A window that says itself it can't tell (σ beyond ambiguousStd_rad) is no evidence of
+    // where the transmitter is: it never starts a track (one started at the wrong endfire
+    // would then swap the right windows away).
+    const bool windowIsSure = std_rad <= opts_.ambiguousStd_rad;
+    if (restart && !windowIsSure)
+    {
+        if (tr.hits > 0 && (dt < 0 || dt > opts_.forgetAfter_s)) tr = Track();
+        dec.predicted_rad = candidates[0].theta_rad;
+        dec.trackStd_rad = sd;
+        return dec;
+    }
     if (restart)
     {
         tr = Track();
@@ -76,7 +87,10 @@ BearingTracker::Decision BearingTracker::update(
     const double d0 = std::abs(difference(z0, tr.angle));
     size_t chosen = 0;
     double dc = d0;
-    if (established && d0 > gate)
+    // Only a window that can't tell is swapped for the track's candidate. A sure window the
+    // track contradicts is a miss: a track that had locked onto the wrong endfire would swap
+    // every right window for the wrong one, and each swap would confirm it.
+    if (established && d0 > gate && !windowIsSure)
         for (size_t k = 1; k < candidates.size(); ++k)
         {
             if (candidates[k].relativePower < opts_.minCandidatePower) continue;
@@ -94,10 +108,9 @@ BearingTracker::Decision BearingTracker::update(
         // Nothing the window supports fits the track.
         dec.miss = true;
         dec.disagreement_rad = d0;
-        // A window that says itself it can't tell (σ beyond ambiguousStd_rad) doesn't count
-        // against the track.
-        if (std_rad <= opts_.ambiguousStd_rad) ++tr.misses;
-        if (tr.misses >= opts_.maxMisses || !established)
+        // A window that can't tell doesn't count against the track.
+        if (windowIsSure) ++tr.misses;
+        if (tr.misses >= opts_.maxMisses || (!established && windowIsSure))
         {
             // The track is lost (or was never sure): start over from the window.
             tr.angle = z0;

@@ -31,13 +31,15 @@ struct BearingCandidate
  * array's full bearing, turned by the odometry's rotation). Between windows the track's
  * variance grows by the odometry increment (|Δyaw|² for a linear array, which can't tell in
  * which direction the rotation moves the folded angle, plus (Δs / `assumedRange_m`)², the
- * range being unknown); without odometry by `noOdometryRate`² Δt. A window's bearing that
- * falls outside the track's gate while another direction the window supports falls inside is
- * replaced by that one (for a linear array only a bearing near one endfire by one near the
- * other); a window with nothing inside the gate keeps its own bearing, counts as
- * a miss (unless its own σ says it is ambiguous) and, if the track is narrow, gets a σ that
- * reaches the track; `maxMisses` misses in a row start the track
- * over from the window's bearing. Not thread-safe. */
+ * range being unknown); without odometry by `noOdometryRate`² Δt. A window that says itself
+ * it can't tell (σ beyond `ambiguousStd_rad`) and whose bearing falls outside the track's
+ * gate while another direction it supports falls inside is replaced by that one (for a linear
+ * array only a bearing near one endfire by one near the other). A sure window is never
+ * replaced: a track that had locked onto the wrong endfire would swap every right window
+ * away, and each swap would confirm it. A window with nothing inside the gate keeps its own
+ * bearing, counts as a miss (if it is sure) and, if the track is narrow, gets a σ that reaches
+ * the track; `maxMisses` misses in a row start the track over from the window's bearing. Only
+ * a sure window starts a track. Not thread-safe. */
 class BearingTracker
 {
 public:
@@ -54,7 +56,8 @@ public:
         double maxTrackStd_rad = 12.0 * M_PI / 180;  //!< a wider track widens no σ
         unsigned minHits = 3;                        //!< windows a track needs before it decides
         unsigned maxMisses = 3;                      //!< misses in a row that start the track over
-        /** A window with a σ beyond this says it can't tell: its miss doesn't count. */
+        /** A window with a σ beyond this says it can't tell: its miss doesn't count, it
+         *  starts no track, and only such a window is swapped for the track's candidate. */
         double ambiguousStd_rad = 30.0 * M_PI / 180;
         /** Linear arrays: the track swaps a bearing only for one near the other endfire,
          *  both at least this far from broadside (the aliasing the array's spacing allows). */

@@ -28,8 +28,10 @@ struct RandomRoomOptions
     std::string receiver = "rt-ac86u";
     /** 0: the robot drives to random goals (random_walk). N > 0: it drives N laps of a
      *  rectangle 0.6–2 m inside the walls, clear of the furniture, at the drawn speed and turn
-     *  rate, and duration_s is set to the N laps (drift correction needs revisits). The room,
-     *  APs, speed and turn rate are the same draws either way. */
+     *  rate, and duration_s is set to the N laps (drift correction needs revisits). Where every
+     *  such concentric rectangle crosses the furniture (2 of seeds 1–1999), one inset per side
+     *  (≥ 0.6 m, the loop ≥ 1.5 m across); a room with no clear loop throws. The room, APs,
+     *  speed and turn rate are the same draws either way. */
     unsigned loopLaps = 0;
     /** The odometry's systematic errors (scenario keys `scale_error`, `yaw_scale_error`,
      *  `yaw_drift_deg_per_m`); the random room itself has none. */
