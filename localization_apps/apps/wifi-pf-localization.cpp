@@ -399,6 +399,8 @@ int main(int argc, char** argv)
             smootherOptions.track.forwardOnly = motion.forwardOnly;  // without odometry
             smootherOptions.graph.useAoa = wifiMap->likelihoodOptions.use.aoa;
             smootherOptions.graph.useAod = wifiMap->likelihoodOptions.use.aod;
+            smootherOptions.graph.useAoaAlternatives =
+                wifiMap->likelihoodOptions.model.aoaAlternativeShare > 0;
             if (recoveryOptions.rate_hz > 0 && !wifiMap->area())
                 std::cerr << "warning: [ParticleRecovery] needs the map's area (min_x ... max_y "
                              "in its creationOpts, or an init_PDF box): off\n";

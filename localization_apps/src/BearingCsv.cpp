@@ -133,6 +133,17 @@ std::vector<BearingRecord> readBearingCsv(
             r.aoaStd = num("aoa_std_deg", v) ? mrpt::DEG2RAD(v) : opt.defaultStd_rad;
             if (flag("aoa_ambiguous") && num("aoa_mirror_deg", v))
                 r.aoaAmbiguous = true, r.aoaMirror = wrapToPi(mrpt::DEG2RAD(v));
+            double weight = 0, directionStd = 0;
+            if (num("aoa_alt_deg", v) && num("aoa_alt_weight", weight) &&
+                num("aoa_direction_std_deg", directionStd))
+            {
+                if (!(weight > 0 && weight <= 1) || !(directionStd > 0))
+                    fail("aoa_alt_weight must be in (0, 1] and aoa_direction_std_deg > 0");
+                r.hasAoaAlternative = true;
+                r.aoaAlternative = wrapToPi(mrpt::DEG2RAD(v));
+                r.aoaAlternativeWeight = weight;
+                r.aoaDirectionStd = mrpt::DEG2RAD(directionStd);
+            }
         }
         if (flag("has_aod") && num("aod_deg", v))
         {
@@ -162,7 +173,7 @@ void writeBearingCsv(const std::string& path, const std::vector<BearingRecord>& 
     f << "# mrpt_wifi bearings CSV: angles in degrees, AoA in the robot's receive-array frame, "
          "AoD in the transmitter's array frame\n";
     f << "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_mirror_deg,aod_deg,aod_std_deg,"
-         "aod_mirror_deg\n";
+         "aod_mirror_deg,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg\n";
     char buf[256];
     for (const auto& r : records)
     {
@@ -176,7 +187,12 @@ void writeBearingCsv(const std::string& path, const std::vector<BearingRecord>& 
         f << buf << ',' << r.transmitter.asString() << ',' << ang(r.hasAoa, r.aoa) << ','
           << ang(r.hasAoa, r.aoaStd) << ',' << ang(r.hasAoa && r.aoaAmbiguous, r.aoaMirror) << ','
           << ang(r.hasAod, r.aod) << ',' << ang(r.hasAod, r.aodStd) << ','
-          << ang(r.hasAod && r.aodAmbiguous, r.aodMirror) << '\n';
+          << ang(r.hasAod && r.aodAmbiguous, r.aodMirror) << ',';
+        const bool alt = r.hasAoa && r.hasAoaAlternative;
+        char weight[32];
+        std::snprintf(weight, sizeof(weight), "%.4f", r.aoaAlternativeWeight);
+        f << ang(alt, r.aoaAlternative) << ',' << (alt ? weight : "") << ',';
+        f << ang(alt, r.aoaDirectionStd) << '\n';
     }
 }
 

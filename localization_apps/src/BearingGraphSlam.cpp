@@ -388,6 +388,8 @@ GraphSlamResult solveOnce(
     }
     const auto decorrelated = [&](const BearingRecord& b, double s)
     { return sigma(s) * decorrelation.factor(b.transmitter); };
+    const auto aoaStd = [&](const BearingRecord& b)
+    { return detail::aoaStdFor(b, opt.useAoaAlternatives); };
     std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     std::vector<std::pair<ceres::ResidualBlockId, double>> bearingBlocks;  // with σ
     for (const auto& a : att)
@@ -400,11 +402,11 @@ GraphSlamResult solveOnce(
             bearingBlocks.emplace_back(
                 problem.AddResidualBlock(
                     new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
-                        new detail::AoaResidual{
-                            a.offset.x, a.offset.y, a.offset.phi, a.b->aoa, a.b->aoaMirror,
-                            decorrelated(*a.b, a.b->aoaStd), a.b->aoaAmbiguous}),
+                        new detail::AoaResidual(detail::aoaResidualOf(
+                            *a.b, a.offset.x, a.offset.y, a.offset.phi,
+                            decorrelated(*a.b, aoaStd(*a.b)), opt.useAoaAlternatives))),
                     detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
-                decorrelated(*a.b, a.b->aoaStd));
+                decorrelated(*a.b, aoaStd(*a.b)));
             res.aoaEdges++;
             apUsed[it->second] = true;
         }

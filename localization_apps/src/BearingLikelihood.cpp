@@ -21,7 +21,26 @@ double recordLogLikelihood(
 {
     const auto s = sensorWorldPose(robot, r.sensorPose);
     double ll = 0;
-    if (usesAoa(r, model, use))
+    if (usesAoa(r, model, use) && usesAoaAlternative(r, model))
+    {
+        // Each direction with its mirror, as logLikelihood() weighs one.
+        const double sigma = model.sigma(r.aoaDirectionStd);
+        const double predicted = predictAoa(s, tx.pose.x, tx.pose.y);
+        const auto density = [&](double z, bool ambiguous, double mirror)
+        {
+            const auto g = [&](double m)
+            {
+                const double q = wrapToPi(predicted - m) / sigma;
+                return std::exp(-0.5 * q * q);
+            };
+            return (ambiguous ? 0.5 * (g(z) + g(mirror)) : g(z)) / (sigma * 2.5066282746310002);
+        };
+        const double share = std::min(0.5, model.aoaAlternativeShare * r.aoaAlternativeWeight);
+        const double g = (1 - share) * density(r.aoa, r.aoaAmbiguous, r.aoaMirror) +
+                         share * density(r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r));
+        ll += std::log((1 - model.outlierProb) * g + model.outlierProb * 0.15915494309189535);
+    }
+    else if (usesAoa(r, model, use))
         ll += model.logLikelihood(
             predictAoa(s, tx.pose.x, tx.pose.y), r.aoa, r.aoaAmbiguous, r.aoaMirror,
             model.sigma(r.aoaStd));
@@ -46,8 +65,13 @@ std::optional<bool> recordAgrees(
     };
     std::optional<bool> agrees;
     if (usesAoa(r, model, use))
-        agrees = within(
-            predictAoa(s, tx.pose.x, tx.pose.y), r.aoa, r.aoaAmbiguous, r.aoaMirror, r.aoaStd);
+    {
+        const double predicted = predictAoa(s, tx.pose.x, tx.pose.y);
+        const double sd = aoaStdUsed(r, model);
+        agrees = within(predicted, r.aoa, r.aoaAmbiguous, r.aoaMirror, sd) ||
+                 (usesAoaAlternative(r, model) &&
+                  within(predicted, r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r), sd));
+    }
     if (usesAod(r, model, use))
         agrees =
             agrees.value_or(true) &&

@@ -8,6 +8,8 @@
 // image, equally consistent with the CSI).
 
 #include <ceres/ceres.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/BearingRecord.h>
 
 #include <algorithm>
 #include <cmath>
@@ -82,11 +84,14 @@ struct OdometryBiasPrior
 };
 
 /** AoA at the robot: the transmitter (ap[0..1]) seen from the receive array, whose pose is the
- *  robot pose ⊕ a fixed offset (odometry since the node ⊕ sensor pose on the robot). */
+ *  robot pose ⊕ a fixed offset (odometry since the node ⊕ sensor pose on the robot). With an
+ *  alternative direction (and its mirror), the closest of all (a max-mixture). */
 struct AoaResidual
 {
     double ox, oy, oth, z, mirror, sigma;
     bool ambiguous;
+    bool hasAlternative = false;
+    double alternative = 0, alternativeMirror = 0;
 
     template <typename T>
     bool operator()(const T* pose, const T* ap, T* r) const
@@ -96,10 +101,38 @@ struct AoaResidual
         const T sx = pose[0] + c * T(ox) - s * T(oy);
         const T sy = pose[1] + s * T(ox) + c * T(oy);
         const T pred = atan2(ap[1] - sy, ap[0] - sx) - pose[2] - T(oth);
-        r[0] = closestCandidate(pred, z, ambiguous, mirror) / T(sigma);
+        r[0] = closestCandidate(pred, z, ambiguous, mirror);
+        if (hasAlternative)
+        {
+            using std::abs;
+            const T other = closestCandidate(pred, alternative, ambiguous, alternativeMirror);
+            if (abs(other) < abs(r[0])) r[0] = other;
+        }
+        r[0] /= T(sigma);
         return true;
     }
 };
+
+/** `b`'s AoA residual seen from the offset (ox, oy, oth) with the given σ; `alternatives`:
+ *  with b's alternative direction, when it has one (GraphSlamOptions::useAoaAlternatives). */
+inline AoaResidual aoaResidualOf(
+    const BearingRecord& b, double ox, double oy, double oth, double sigma, bool alternatives)
+{
+    AoaResidual r{ox, oy, oth, b.aoa, b.aoaMirror, sigma, b.aoaAmbiguous};
+    if (alternatives && b.hasAoaAlternative)
+    {
+        r.hasAlternative = true;
+        r.alternative = b.aoaAlternative;
+        r.alternativeMirror = b.aoaAmbiguous ? aoaAlternativeMirror(b) : b.aoaAlternative;
+    }
+    return r;
+}
+
+/** The reported σ a solver takes for `b`'s AoA (see aoaResidualOf). */
+inline double aoaStdFor(const BearingRecord& b, bool alternatives)
+{
+    return alternatives && b.hasAoaAlternative ? b.aoaDirectionStd : b.aoaStd;
+}
 
 /** AoD at the transmitter (ap = x, y, yaw): direction of the receive array in its frame. */
 struct AodResidual

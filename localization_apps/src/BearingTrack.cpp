@@ -168,7 +168,11 @@ TrackResult solveBearingTrack(
     if (uses.empty()) throw std::runtime_error("solveBearingTrack: no usable bearing");
 
     const auto sigmaOf = [&](const Use& u)
-    { return std::max(opt.minStd_rad, opt.stdScale * (u.departure ? u.b->aodStd : u.b->aoaStd)); };
+    {
+        const double reported =
+            u.departure ? u.b->aodStd : detail::aoaStdFor(*u.b, opt.useAoaAlternatives);
+        return std::max(opt.minStd_rad, opt.stdScale * reported);
+    };
 
     // Bearings taken close together share their multipath error (as in the graph), counted on
     // the first start's track: the same σ for every start, whose costs are compared.
@@ -201,7 +205,7 @@ TrackResult solveBearingTrack(
             const auto& s = b.sensorPose;
             auto* r = new InterpolatedBearingResidual{
                 u.alpha,
-                {s.x, s.y, s.phi, b.aoa, b.aoaMirror, sigma, b.aoaAmbiguous},
+                detail::aoaResidualOf(b, s.x, s.y, s.phi, sigma, opt.useAoaAlternatives),
                 {s.x, s.y, b.aod, b.aodMirror, sigma, b.aodAmbiguous},
                 u.departure,
                 {u.tx->pose.x, u.tx->pose.y, u.tx->pose.phi}};

@@ -103,6 +103,8 @@ void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
     model.maxStd_rad =
         mrpt::DEG2RAD(c.read_double(s, "max_std_deg", mrpt::RAD2DEG(model.maxStd_rad)));
     model.stdScale = c.read_double(s, "std_scale", model.stdScale);
+    model.aoaAlternativeShare =
+        c.read_double(s, "aoa_alternative_share", model.aoaAlternativeShare);
     bearingWeight = c.read_double(s, "bearing_weight", bearingWeight);
     if (!(model.outlierProb > 0 && model.outlierProb < 1))
         throw std::invalid_argument("[" + s + "] outlier_prob must be in (0, 1)");
@@ -110,6 +112,8 @@ void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
         throw std::invalid_argument("[" + s + "] min_std_deg and std_scale must be > 0");
     if (!(bearingWeight > 0 && bearingWeight <= 1))
         throw std::invalid_argument("[" + s + "] bearing_weight must be in (0, 1]");
+    if (!(model.aoaAlternativeShare >= 0 && model.aoaAlternativeShare <= 0.5))
+        throw std::invalid_argument("[" + s + "] aoa_alternative_share must be in [0, 0.5]");
     // A filter on such a map runs without error and never moves from its prior.
     if (!use.aoa && !use.aod)
         throw std::invalid_argument(
@@ -122,7 +126,8 @@ void CWiFiBearingMap::TLikelihoodOptions::dumpToTextStream(std::ostream& out) co
         << "\noutlier_prob = " << model.outlierProb
         << "\nmin_std_deg = " << mrpt::RAD2DEG(model.minStd_rad)
         << "\nmax_std_deg = " << mrpt::RAD2DEG(model.maxStd_rad)
-        << "\nstd_scale = " << model.stdScale << "\nbearing_weight = " << bearingWeight << "\n";
+        << "\nstd_scale = " << model.stdScale << "\nbearing_weight = " << bearingWeight
+        << "\naoa_alternative_share = " << model.aoaAlternativeShare << "\n";
 }
 
 // ---------------------------------------------------------------- the map
@@ -234,7 +239,7 @@ void CWiFiBearingMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
 // ---------------------------------------------------------------- serialization
 uint8_t CWiFiBearingMap::serializeGetVersion() const
 {
-    return 2;  // 1: the area; 2: the bearing weight
+    return 3;  // 1: the area; 2: the bearing weight; 3: the AoA alternative's share
 }
 
 void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
@@ -247,6 +252,7 @@ void CWiFiBearingMap::serializeTo(mrpt::serialization::CArchive& out) const
     out << area_.has_value();
     if (area_) out << area_->min.x << area_->max.x << area_->min.y << area_->max.y;
     out << likelihoodOptions.bearingWeight;
+    out << likelihoodOptions.model.aoaAlternativeShare;
 }
 
 void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -256,6 +262,7 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
         case 0:
         case 1:
         case 2:
+        case 3:
         {
             std::string yaml;
             // A map of thousands of transmitters is well below 64 MB of YAML.
@@ -280,6 +287,12 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
                 throw std::runtime_error(
                     "serialized CWiFiBearingMap: bearing weight " +
                     std::to_string(likelihoodOptions.bearingWeight) + " is outside (0, 1]");
+            m.aoaAlternativeShare = 0;
+            if (version >= 3) in >> m.aoaAlternativeShare;
+            if (!(m.aoaAlternativeShare >= 0 && m.aoaAlternativeShare <= 0.5))
+                throw std::runtime_error(
+                    "serialized CWiFiBearingMap: AoA alternative share " +
+                    std::to_string(m.aoaAlternativeShare) + " is outside [0, 0.5]");
         }
         break;
         default:

@@ -121,6 +121,8 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     smootherOptions.loadFromConfigFile(ini, "WindowSmoother");
     smootherOptions.graph.useAoa = wifiMap_->likelihoodOptions.use.aoa;
     smootherOptions.graph.useAod = wifiMap_->likelihoodOptions.use.aod;
+    smootherOptions.graph.useAoaAlternatives =
+        wifiMap_->likelihoodOptions.model.aoaAlternativeShare > 0;
     smootherOptions.track.forwardOnly = motion_.forwardOnly;  // without odometry
     smoother_ = WindowSmoother(smootherOptions, wifiMap_->transmitters());
     smoother_.setArea(wifiMap_->area());

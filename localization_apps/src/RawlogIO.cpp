@@ -22,6 +22,9 @@ BearingRecord recordFromObservation(const CObservationWiFiBearing& o)
     r.hasAoa = true;
     r.aoa = o.aoa_rad, r.aoaStd = o.aoaStd_rad;
     r.aoaAmbiguous = o.aoaAmbiguous, r.aoaMirror = o.aoaMirror_rad;
+    r.hasAoaAlternative = o.hasAoaAlternative;
+    r.aoaAlternative = o.aoaAlternative_rad, r.aoaAlternativeWeight = o.aoaAlternativeWeight;
+    r.aoaDirectionStd = o.hasAoaAlternative ? o.aoaDirectionStd_rad : o.aoaStd_rad;
     r.hasAod = o.hasAod;
     r.aod = o.aod_rad, r.aodStd = o.aodStd_rad;
     r.aodAmbiguous = o.aodAmbiguous, r.aodMirror = o.aodMirror_rad;
@@ -43,6 +46,9 @@ CObservationWiFiBearing::Ptr observationFromRecord(const BearingRecord& r, const
     o->aoaStd_rad = r.hasAoa ? r.aoaStd : 1e3;
     o->aoaAmbiguous = r.hasAoa && r.aoaAmbiguous;
     o->aoaMirror_rad = r.aoaMirror;
+    o->hasAoaAlternative = r.hasAoa && r.hasAoaAlternative;
+    o->aoaAlternative_rad = r.aoaAlternative, o->aoaAlternativeWeight = r.aoaAlternativeWeight;
+    o->aoaDirectionStd_rad = o->hasAoaAlternative ? r.aoaDirectionStd : o->aoaStd_rad;
     o->hasAod = r.hasAod;
     o->aod_rad = r.aod, o->aodStd_rad = r.aodStd;
     o->aodAmbiguous = r.aodAmbiguous, o->aodMirror_rad = r.aodMirror;

@@ -178,9 +178,15 @@ double WindowSmoother::recentAoaResidual(
         if (!tx || !poses.interpolate(b.t, robot)) continue;
         const double predicted =
             predictAoa(sensorWorldPose(robot, b.sensorPose), tx->pose.x, tx->pose.y);
-        double r = std::abs(mrpt::math::wrapToPi(predicted - b.aoa));
-        if (b.aoaAmbiguous)
-            r = std::min(r, std::abs(mrpt::math::wrapToPi(predicted - b.aoaMirror)));
+        const auto residual = [&](double z, double mirror)
+        {
+            const double r = std::abs(mrpt::math::wrapToPi(predicted - z));
+            return b.aoaAmbiguous ? std::min(r, std::abs(mrpt::math::wrapToPi(predicted - mirror)))
+                                  : r;
+        };
+        double r = residual(b.aoa, b.aoaMirror);
+        if (opts_.graph.useAoaAlternatives && b.hasAoaAlternative)
+            r = std::min(r, residual(b.aoaAlternative, aoaAlternativeMirror(b)));
         residuals.push_back(r);
     }
     return detail::median(std::move(residuals));  // 0: nothing recent to check against

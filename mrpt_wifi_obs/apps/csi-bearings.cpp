@@ -281,7 +281,7 @@ int main(int argc, char** argv)
                 if (!csv) throw std::runtime_error("cannot create '" + argCsv.getValue() + "'");
                 csv << "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,"
                        "aoa_ambiguous,aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,"
-                       "delay_ns,quality,frames\n";
+                       "delay_ns,quality,frames,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg\n";
                 csv << std::fixed;
             }
             if (argImages.isSet()) fs::create_directories(argImages.getValue());
@@ -353,7 +353,10 @@ int main(int argc, char** argv)
                         << "," << int(b->hasAod) << "," << deg(b->hasAod, b->aod_rad) << ","
                         << deg(b->hasAod, b->aodStd_rad) << ","
                         << deg(b->hasAod && b->aodAmbiguous, b->aodMirror_rad) << ","
-                        << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << "\n";
+                        << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << ","
+                        << deg(b->hasAoaAlternative, b->aoaAlternative_rad) << ","
+                        << (b->hasAoaAlternative ? std::to_string(b->aoaAlternativeWeight) : "")
+                        << "," << deg(b->hasAoaAlternative, b->aoaDirectionStd_rad) << "\n";
                 }
                 const bool picture =
                     (argImages.isSet() || argRawlogImages.getValue()) &&

@@ -31,7 +31,7 @@ int32_t CObservationWiFiBearing::mirrorLandmarkIdOf(const MacAddress& mac)
 
 uint8_t CObservationWiFiBearing::serializeGetVersion() const
 {
-    return 0;
+    return 1;
 }
 
 void CObservationWiFiBearing::serializeTo(mrpt::serialization::CArchive& out) const
@@ -42,6 +42,7 @@ void CObservationWiFiBearing::serializeTo(mrpt::serialization::CArchive& out) co
     out << aoa_rad << aoaStd_rad << aoaAmbiguous << aoaMirror_rad;
     out << hasAod << aod_rad << aodStd_rad << aodAmbiguous << aodMirror_rad;
     out << hasDelay << delay_s << quality;
+    out << hasAoaAlternative << aoaAlternative_rad << aoaAlternativeWeight << aoaDirectionStd_rad;
 }
 
 void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -49,6 +50,7 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
     switch (version)
     {
         case 0:
+        case 1:
         {
             constexpr const char* kWhat = "CObservationWiFiBearing";
             in >> timestamp;
@@ -68,6 +70,12 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
             in >> aoa_rad >> aoaStd_rad >> aoaAmbiguous >> aoaMirror_rad;
             in >> hasAod >> aod_rad >> aodStd_rad >> aodAmbiguous >> aodMirror_rad;
             in >> hasDelay >> delay_s >> quality;
+            if (version >= 1)
+                in >> hasAoaAlternative >> aoaAlternative_rad >> aoaAlternativeWeight >>
+                    aoaDirectionStd_rad;
+            else
+                hasAoaAlternative = false, aoaAlternative_rad = 0, aoaAlternativeWeight = 0,
+                aoaDirectionStd_rad = aoaStd_rad;
         }
         break;
         default:
@@ -90,6 +98,10 @@ void CObservationWiFiBearing::getDescriptionAsText(std::ostream& o) const
     if (aoaAmbiguous)
         o << "  AoA mirror      : " << deg(aoaMirror_rad)
           << " deg  (linear array: equally consistent, not resolved)\n";
+    if (hasAoaAlternative)
+        o << "  AoA alternative : " << deg(aoaAlternative_rad) << " deg  (weight "
+          << aoaAlternativeWeight << " of the chosen one's; sigma of each direction "
+          << deg(aoaDirectionStd_rad) << " deg)\n";
     if (hasAod)
     {
         o << "  AoD             : " << deg(aod_rad) << " deg  (sigma " << deg(aodStd_rad)
@@ -106,7 +118,8 @@ void CObservationWiFiBearing::getDescriptionAsText(std::ostream& o) const
 std::string CObservationWiFiBearing::exportTxtHeader() const
 {
     return "%  MAC_HI24 MAC_LO24 CHANNEL BW_MHZ RSSI_DBM AOA_RAD AOA_STD_RAD AOA_AMBIGUOUS "
-           "AOA_MIRROR_RAD HAS_AOD AOD_RAD AOD_STD_RAD AOD_MIRROR_RAD DELAY_S QUALITY FRAMES";
+           "AOA_MIRROR_RAD HAS_AOD AOD_RAD AOD_STD_RAD AOD_MIRROR_RAD DELAY_S QUALITY FRAMES "
+           "HAS_AOA_ALT AOA_ALT_RAD AOA_ALT_WEIGHT AOA_DIRECTION_STD_RAD";
 }
 
 std::string CObservationWiFiBearing::exportTxtDataRow() const
@@ -118,7 +131,8 @@ std::string CObservationWiFiBearing::exportTxtDataRow() const
       << chanspec.bandwidthMHz << " " << int(rssi_dBm) << " " << aoa_rad << " " << aoaStd_rad << " "
       << int(aoaAmbiguous) << " " << aoaMirror_rad << " " << int(hasAod) << " " << aod_rad << " "
       << aodStd_rad << " " << aodMirror_rad << " " << (hasDelay ? delay_s : 0.0) << " " << quality
-      << " " << framesUsed;
+      << " " << framesUsed << " " << int(hasAoaAlternative) << " " << aoaAlternative_rad << " "
+      << aoaAlternativeWeight << " " << aoaDirectionStd_rad;
     return o.str();
 }
 

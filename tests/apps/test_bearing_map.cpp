@@ -130,19 +130,29 @@ TEST(BearingMapFile, ArrayGeometryAndMirror)
     EXPECT_NEAR(sq.mirrorOf(0.3), 0.3, 1e-12);
 }
 
+namespace
+{
+/** `ap`'s AoA exactly as seen from `robot`, with σ `std`. */
+BearingRecord exactAoa(const KnownTransmitter& ap, const mrpt::math::TPose2D& robot, double std)
+{
+    BearingRecord r;
+    r.t = 1;
+    r.transmitter = ap.mac;
+    r.hasAoa = true;
+    r.aoaStd = std;
+    r.aoa = predictAoa(sensorWorldPose(robot, r.sensorPose), ap.pose.x, ap.pose.y);
+    return r;
+}
+}  // namespace
+
 TEST(BearingMapLikelihood, PeaksAtTheTruePoseAndIsMirrorAware)
 {
     CWiFiBearingMap map;
     map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
     const auto& ap = map.transmitters().at(0);
     const mrpt::math::TPose2D robot(4, 2, 0.3);
-    BearingRecord r;
-    r.t = 1;
-    r.transmitter = ap.mac;
-    r.hasAoa = true;
-    r.aoaStd = 0.05;
+    BearingRecord r = exactAoa(ap, robot, 0.05);
     const auto s = sensorWorldPose(robot, r.sensorPose);
-    r.aoa = predictAoa(s, ap.pose.x, ap.pose.y);
     r.hasAod = true;
     r.aodStd = 0.05;
     r.aod = predictAod(ap.pose, s.x, s.y);
@@ -170,6 +180,51 @@ TEST(BearingMapLikelihood, PeaksAtTheTruePoseAndIsMirrorAware)
     EXPECT_GT(at(robot.x, robot.y, robot.phi), at(robot.x, robot.y, mirrorYaw) + 1);
 }
 
+TEST(BearingMapLikelihood, AnAlternativeDirectionIsWeighedAsAMixture)
+{
+    // A window near endfire: its σ (80°) reaches the other endfire, which came as close; each
+    // direction alone is sharp (4°). With aoa_alternative_share the map weighs the two
+    // directions; without, the wide σ is beyond max_std_deg and the bearing says nothing.
+    CWiFiBearingMap map;
+    map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
+    map.likelihoodOptions.use.aod = false;
+    map.likelihoodOptions.model.minStd_rad = mrpt::DEG2RAD(2.0);
+    const auto& ap = map.transmitters().at(0);
+    const mrpt::math::TPose2D robot(4, 2, 0.3);
+    BearingRecord r = exactAoa(ap, robot, mrpt::DEG2RAD(80.0));
+    r.hasAoaAlternative = true;
+    r.aoaAlternative = wrapToPi(r.aoa + mrpt::DEG2RAD(150.0));
+    r.aoaAlternativeWeight = 1;
+    r.aoaDirectionStd = mrpt::DEG2RAD(4.0);
+    const auto obs = observationFromRecord(r);
+    const auto at = [&](double yaw)
+    {
+        return map.computeObservationLikelihood(
+            *obs, mrpt::poses::CPose3D(robot.x, robot.y, 0, yaw, 0, 0));
+    };
+    // Heading whose prediction lands on the alternative, and one that lands on neither.
+    const double onAlternative = robot.phi + r.aoa - r.aoaAlternative;
+    const double onNeither = robot.phi + mrpt::DEG2RAD(60.0);
+
+    EXPECT_EQ(at(robot.phi), 0.0) << "share 0: a σ beyond max_std_deg is not weighed";
+    map.likelihoodOptions.model.aoaAlternativeShare = 0.1;
+    EXPECT_GT(at(robot.phi), at(onAlternative) + 1) << "the chosen direction weighs most";
+    EXPECT_GT(at(onAlternative), at(onNeither) + 1) << "the alternative still explains a pose";
+    // The alternative's weight in the mixture follows the share and the window's weight.
+    const double fullWeight = at(onAlternative);
+    map.likelihoodOptions.model.aoaAlternativeShare = 0.02;
+    EXPECT_LT(at(onAlternative), fullWeight - 1);
+
+    // A window without an alternative is weighed as before, whatever the share.
+    r.hasAoaAlternative = false;
+    r.aoaStd = mrpt::DEG2RAD(4.0);
+    const auto sure = observationFromRecord(r);
+    const mrpt::poses::CPose3D offPose(robot.x, robot.y, 0, robot.phi + 0.05, 0, 0);
+    const double withShare = map.computeObservationLikelihood(*sure, offPose);
+    map.likelihoodOptions.model.aoaAlternativeShare = 0;
+    EXPECT_DOUBLE_EQ(withShare, map.computeObservationLikelihood(*sure, offPose));
+}
+
 TEST(BearingMapLikelihood, ZeroForOtherObservationsAndUnknownTransmitters)
 {
     CWiFiBearingMap map;
@@ -193,6 +248,7 @@ TEST(BearingMapSerialization, RoundTrip)
     CWiFiBearingMap map;
     map.setTransmitters(TransmitterMap::fromYamlText(kApsYaml));
     map.likelihoodOptions.model.outlierProb = 0.2;
+    map.likelihoodOptions.model.aoaAlternativeShare = 0.05;
     mrpt::io::CMemoryStream buf;
     auto arch = mrpt::serialization::archiveFrom(buf);
     arch << map;
@@ -203,6 +259,7 @@ TEST(BearingMapSerialization, RoundTrip)
     EXPECT_EQ(back->transmitters().size(), 3u);
     EXPECT_NEAR(back->transmitters().at(2).pose.phi, mrpt::DEG2RAD(-135.0), 1e-9);
     EXPECT_DOUBLE_EQ(back->likelihoodOptions.model.outlierProb, 0.2);
+    EXPECT_DOUBLE_EQ(back->likelihoodOptions.model.aoaAlternativeShare, 0.05);
 }
 
 // The map inside MRPT's own Monte Carlo localization, initialised uniformly over the room (the

@@ -85,6 +85,47 @@ TEST(LocalizationCsv, ReadsCsiBearingsCsvWithFlagColumns)
     EXPECT_TRUE(clean.csvWarning("b.csv").empty());
 }
 
+TEST(LocalizationCsv, ReadsTheAoaAlternative)
+{
+    // csi-bearings --csv: a window near endfire has aoa_alt_deg, its weight and the σ of each
+    // direction; the others leave the three cells empty.
+    const std::string header =
+        "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_ambiguous,aoa_mirror_deg,aoa_alt_deg,"
+        "aoa_alt_weight,aoa_direction_std_deg\n";
+    const auto r = readBearingCsv(
+        writeTemp(
+            header + "1700000000.1,02:00:00:00:03:02,80,75,1,100,-88,0.9,4.5\n"
+                     "1700000000.2,02:00:00:00:03:02,20,3,1,160,,,\n"),
+        {});
+    ASSERT_EQ(r.size(), 2u);
+    EXPECT_TRUE(r[0].hasAoaAlternative);
+    EXPECT_NEAR(r[0].aoaAlternative, mrpt::DEG2RAD(-88.0), 1e-12);
+    EXPECT_DOUBLE_EQ(r[0].aoaAlternativeWeight, 0.9);
+    EXPECT_NEAR(r[0].aoaDirectionStd, mrpt::DEG2RAD(4.5), 1e-12);
+    EXPECT_NEAR(r[0].aoaStd, mrpt::DEG2RAD(75.0), 1e-12) << "the σ that reaches both stays";
+    EXPECT_FALSE(r[1].hasAoaAlternative);
+    try
+    {
+        readBearingCsv(
+            writeTemp(header + "1700000000.1,02:00:00:00:03:02,80,75,1,100,-88,1.5,4\n"), {});
+        FAIL() << "accepted a weight of 1.5";
+    }
+    catch (const std::runtime_error& e)
+    {
+        EXPECT_NE(std::string(e.what()).find(":2: aoa_alt_weight"), std::string::npos) << e.what();
+    }
+    // Written back (writeBearingCsv) and read again.
+    const auto path = mrpt_wifi::test::tempPath();
+    writeBearingCsv(path, r);
+    const auto back = readBearingCsv(path, {});
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_TRUE(back[0].hasAoaAlternative);
+    EXPECT_NEAR(back[0].aoaAlternative, r[0].aoaAlternative, 1e-4);
+    EXPECT_NEAR(back[0].aoaAlternativeWeight, 0.9, 1e-4);
+    EXPECT_NEAR(back[0].aoaDirectionStd, r[0].aoaDirectionStd, 1e-4);
+    EXPECT_FALSE(back[1].hasAoaAlternative);
+}
+
 TEST(LocalizationCsv, ErrorsNameTheLine)
 {
     BearingCsvOptions o;

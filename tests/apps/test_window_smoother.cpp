@@ -85,6 +85,21 @@ WorldOptions loopWithoutAod(double duration_s)
     return o;
 }
 
+/** The track of the 20 s up to 30 s into `w`, started from a filter 0.5 m behind the robot
+ *  and 10° off its heading. */
+TrackInput laggingStartInput(const World& w)
+{
+    TrackInput in;
+    in.t1 = w.truth.t.front() + 30, in.t0 = in.t1 - 20;
+    in.aps = w.aps, in.bearings = w.bearings;
+    const mrpt::poses::CPose2D lag(-0.5, 0.2, 10 * M_PI / 180);
+    Trajectory2D start;
+    for (size_t i = 0; i < w.truth.size(); i += 10)
+        start.push_back(w.truth.t[i], (mrpt::poses::CPose2D(w.truth.poses[i]) + lag).asTPose());
+    in.starts = {start};
+    return in;
+}
+
 double median(std::vector<double> v)
 {
     std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
@@ -223,15 +238,9 @@ double nodeError(const Trajectory2D& track, const Trajectory2D& truth, size_t k)
 TEST(BearingTrack, FollowsARobotWithoutOdometryFromALaggingStart)
 {
     const auto w = driftingDrive();
-    const double t1 = w.truth.t.front() + 30, t0 = t1 - 20;
-    // The start: a filter 0.5 m behind the robot, 10 deg off its heading.
-    const mrpt::poses::CPose2D lag(-0.5, 0.2, 10 * M_PI / 180);
-    TrackInput in;
-    in.t0 = t0, in.t1 = t1, in.aps = w.aps, in.bearings = w.bearings;
-    Trajectory2D start;
-    for (size_t i = 0; i < w.truth.size(); i += 10)
-        start.push_back(w.truth.t[i], (mrpt::poses::CPose2D(w.truth.poses[i]) + lag).asTPose());
-    in.starts = {start};
+    auto in = laggingStartInput(w);
+    const double t1 = in.t1;
+    const Trajectory2D start = in.starts.front();
     TrackMotionPrior prior;
     prior.forwardOnly = true;
     GraphSlamOptions g = WindowSmootherOptions::defaultGraph();
@@ -268,6 +277,42 @@ TEST(BearingTrack, FollowsARobotWithoutOdometryFromALaggingStart)
     in.area = mrpt::math::TBoundingBox({0, 0, 0}, {10, 3, 0});  // the loop reaches y = 6
     const auto bounded = solveBearingTrack(in, prior, g);
     for (const auto& p : bounded.poses.poses) EXPECT_LT(p.y, 3.2);
+}
+
+TEST(BearingTrack, WeighsBothDirectionsOfAWindowThatCannotTell)
+{
+    // Three of the four APs only give windows that can't tell their direction from another one
+    // 90° away, mirrors included (as near endfire): σ 70° reaches both, each direction alone
+    // has its own σ.
+    auto w = driftingDrive();
+    for (auto& b : w.bearings)
+        if (b.transmitter != w.aps.at(3).mac)
+        {
+            b.hasAoaAlternative = true;
+            b.aoaAlternative = b.aoa - std::copysign(M_PI / 2, b.aoa);
+            b.aoaAlternativeWeight = 1;
+            b.aoaDirectionStd = b.aoaStd;
+            b.aoaStd = 70 * M_PI / 180;
+        }
+    const auto in = laggingStartInput(w);
+    TrackMotionPrior prior;
+    prior.forwardOnly = true;
+    GraphSlamOptions g = WindowSmootherOptions::defaultGraph();
+    g.useAod = false;
+    const auto medianError = [&](const TrackResult& r)
+    {
+        std::vector<double> errors;
+        for (size_t k = 0; k < r.poses.size(); ++k)
+            errors.push_back(nodeError(r.poses, w.truth, k));
+        return median(errors);
+    };
+    g.useAoaAlternatives = false;  // one direction with the σ that reaches both
+    const double wide = medianError(solveBearingTrack(in, prior, g));
+    g.useAoaAlternatives = true;
+    const double both = medianError(solveBearingTrack(in, prior, g));
+    // Four sure APs: 0.09 m; one AP alone: 7 m.
+    EXPECT_LT(both, 0.12) << "as with four sure APs";
+    EXPECT_GT(wide, 1.5 * both) << "one AP's bearings and three 70° ones: wide " << wide;
 }
 
 TEST(BearingTrack, RefusesWhatItCannotSolve)

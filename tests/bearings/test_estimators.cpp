@@ -122,6 +122,36 @@ TEST(BearingEstimators, EveryEstimatorFindsOneCleanPathOnTheLinearArray)
         }
 }
 
+TEST(BearingEstimators, NearEndfireTheOtherEndfireIsReportedAsTheAlternative)
+{
+    // Near endfire the rt-ac86u's 26 mm spacing (λ/2) makes the other endfire fit almost as
+    // well: the σ reaches it, and the alternative says where it is, so a consumer can weigh the
+    // two directions each with its own σ instead of one σ of 60°+.
+    test::SyntheticSpec s;
+    s.rx = test::loadArray("rt-ac86u");
+    s.snr_dB = 25;
+    for (double deg : {78.0, -80.0})
+    {
+        s.paths = {{deg * kDeg, 0, 12e-9, {1, 0}}};
+        const BearingResult r = run("default", s, 8);
+        EXPECT_LT(angleDistance(r.aoa_rad, deg * kDeg) / kDeg, 3.0) << deg;
+        ASSERT_TRUE(r.hasAoaAlternative) << deg;
+        // The other endfire, folded into the front half-plane like aoa_rad.
+        EXPECT_LT(
+            angleDistance(r.aoaAlternative_rad, -std::copysign(90.0, deg) * kDeg) / kDeg, 15.0)
+            << deg << ": alternative at " << r.aoaAlternative_rad / kDeg;
+        EXPECT_GT(r.aoaAlternativeWeight, 0.5) << deg;
+        EXPECT_LE(r.aoaAlternativeWeight, 1.0) << deg;
+        EXPECT_GT(r.aoaStd_rad / kDeg, 30.0) << deg << ": the σ reaches the alternative";
+        EXPECT_LT(r.aoaDirectionStd_rad / kDeg, 10.0) << deg << ": each direction is sharp";
+    }
+    // Broadside: nothing else fits; the direction's σ is the σ.
+    s.paths = {{10 * kDeg, 0, 12e-9, {1, 0}}};
+    const BearingResult r = run("default", s, 8);
+    EXPECT_FALSE(r.hasAoaAlternative);
+    EXPECT_DOUBLE_EQ(r.aoaDirectionStd_rad, r.aoaStd_rad);
+}
+
 TEST(BearingEstimators, PathBehindALinearArrayIsReportedAsTheMirrorPair)
 {
     test::SyntheticSpec s;
@@ -292,13 +322,28 @@ TEST(BearingEstimators, DefaultGivesAodAndItsSigmaCoversTheOtherEndfire)
     EXPECT_FALSE(run("default", s, 8).hasAod);
 }
 
-TEST(BearingObservation, SerializesAndConvertsForMrptTools)
+namespace
+{
+/** A bearing whose window also supported another direction (-1.5 rad, weight 0.9, 0.05 rad
+ *  each). */
+CObservationWiFiBearing bearingWithAlternative()
 {
     CObservationWiFiBearing b;
-    b.sensorLabel = "WIFI_CSI";
-    b.timestamp = mrpt::Clock::fromDouble(1700000000.5);
     b.transmitter = MacAddress::fromString("02:00:00:00:02:01");
     b.chanspec = Chanspec::make(155, 80);
+    b.hasAoaAlternative = true;
+    b.aoaAlternative_rad = -1.5;
+    b.aoaAlternativeWeight = 0.9;
+    b.aoaDirectionStd_rad = 0.05;
+    return b;
+}
+}  // namespace
+
+TEST(BearingObservation, SerializesAndConvertsForMrptTools)
+{
+    CObservationWiFiBearing b = bearingWithAlternative();
+    b.sensorLabel = "WIFI_CSI";
+    b.timestamp = mrpt::Clock::fromDouble(1700000000.5);
     b.algorithm = "spotfi";
     b.aoa_rad = 0.3;
     b.aoaStd_rad = 0.02;
@@ -323,11 +368,16 @@ TEST(BearingObservation, SerializesAndConvertsForMrptTools)
     EXPECT_DOUBLE_EQ(r->delay_s, b.delay_s);
     EXPECT_EQ(r->timestamp, b.timestamp);
     EXPECT_EQ(r->sensorLabel, "WIFI_CSI");
+    EXPECT_TRUE(r->hasAoaAlternative);
+    EXPECT_DOUBLE_EQ(r->aoaAlternative_rad, -1.5);
+    EXPECT_DOUBLE_EQ(r->aoaAlternativeWeight, 0.9);
+    EXPECT_DOUBLE_EQ(r->aoaDirectionStd_rad, 0.05);
 
     std::ostringstream text;
     r->getDescriptionAsText(text);
     EXPECT_NE(text.str().find("02:00:00:00:02:01"), std::string::npos);
     EXPECT_NE(text.str().find("mirror"), std::string::npos);
+    EXPECT_NE(text.str().find("AoA alternative : -85.94 deg"), std::string::npos) << text.str();
 
     const auto br = r->asBearingRange();
     ASSERT_EQ(br->sensedData.size(), 2u);  // both mirror candidates
@@ -339,6 +389,35 @@ TEST(BearingObservation, SerializesAndConvertsForMrptTools)
     mrpt::io::CMemoryStream buf2;  // MRPT rejects duplicate IDs on writing: must not throw
     auto ar2 = mrpt::serialization::archiveFrom(buf2);
     EXPECT_NO_THROW(ar2 << *br);
+}
+
+TEST(BearingObservation, ReadsRawlogsWrittenBeforeTheAlternative)
+{
+    // Version 0 (before 2026-11-28) had no alternative: the same bytes without its four fields.
+    CObservationWiFiBearing b = bearingWithAlternative();
+    b.aoa_rad = 1.3;
+    b.aoaStd_rad = 1.1;
+    mrpt::io::CMemoryStream buf;
+    auto ar = mrpt::serialization::archiveFrom(buf);
+    ar << b;
+    // [name length | 0x80][class name][version][fields][0x88]
+    std::vector<uint8_t> bytes(
+        static_cast<const uint8_t*>(buf.getRawBufferData()),
+        static_cast<const uint8_t*>(buf.getRawBufferData()) + buf.getTotalBytesCount());
+    const size_t nameLength = bytes[0] & 0x7F;
+    ASSERT_EQ(bytes[1 + nameLength], 1) << "version byte";
+    ASSERT_EQ(bytes.back(), 0x88);
+    constexpr size_t kAlternativeBytes = 1 + 3 * sizeof(double);
+    bytes[1 + nameLength] = 0;
+    bytes.erase(bytes.end() - 1 - long(kAlternativeBytes), bytes.end() - 1);
+    mrpt::io::CMemoryStream old;
+    old.assignMemoryNotOwn(bytes.data(), bytes.size());
+    auto oldAr = mrpt::serialization::archiveFrom(old);
+    auto r = std::dynamic_pointer_cast<CObservationWiFiBearing>(oldAr.ReadObject());
+    ASSERT_TRUE(r);
+    EXPECT_DOUBLE_EQ(r->aoa_rad, 1.3);
+    EXPECT_FALSE(r->hasAoaAlternative);
+    EXPECT_DOUBLE_EQ(r->aoaDirectionStd_rad, 1.1) << "without an alternative: aoaStd_rad";
 }
 
 TEST(BearingProcessorChain, ProducesBearingObservationsAndPictures)

@@ -124,12 +124,21 @@ void BearingProcessor::track(const CObservationWiFiCSI& csi)
         const bool linear = rx.size() >= 2 && rx.isLinear();
         double theta = wrapAngle(candidates_[d.chosen].theta_rad);
         if (linear && angleDistance(theta, rx.broadside()) > M_PI / 2) theta = rx.mirrorOf(theta);
+        // Only a window that can't tell is swapped: the estimator's own choice becomes the
+        // alternative, as likely as the track's was to it.
+        if (!r.hasAoaAlternative) r.aoaAlternativeWeight = candidates_[d.chosen].relativePower;
+        r.hasAoaAlternative = true;
+        r.aoaAlternative_rad = r.aoa_rad;
         r.aoa_rad = theta;
         r.aoaMirror_rad = linear ? rx.mirrorOf(theta) : theta;
     }
     // A bearing the confident track contradicts: σ reaches the track.
     if (d.confident && d.miss)
-        r.aoaStd_rad = std::min(std::max(r.aoaStd_rad, 0.5 * d.disagreement_rad), M_PI / 2);
+    {
+        const double reach = 0.5 * d.disagreement_rad;
+        r.aoaStd_rad = std::min(std::max(r.aoaStd_rad, reach), M_PI / 2);
+        r.aoaDirectionStd_rad = std::min(std::max(r.aoaDirectionStd_rad, reach), M_PI / 2);
+    }
 }
 
 void BearingProcessor::setTransmitterArray(const MacAddress& mac, AntennaArray array)
@@ -273,6 +282,10 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     b->aoaStd_rad = res.aoaStd_rad;
     b->aoaAmbiguous = res.aoaAmbiguous;
     b->aoaMirror_rad = res.aoaMirror_rad;
+    b->hasAoaAlternative = res.hasAoaAlternative;
+    b->aoaAlternative_rad = res.hasAoaAlternative ? res.aoaAlternative_rad : 0.0;
+    b->aoaAlternativeWeight = res.hasAoaAlternative ? res.aoaAlternativeWeight : 0.0;
+    b->aoaDirectionStd_rad = res.hasAoaAlternative ? res.aoaDirectionStd_rad : res.aoaStd_rad;
     const PhaseCalibration* txCal = lastFrame_->txCalibration;
     b->hasAod = res.hasAod && (txCal || opts_.uncalibratedAod);
     b->aod_rad = res.aod_rad;

@@ -38,14 +38,25 @@ const std::vector<std::string> kProfileKeys = {
     "delay_bins", "delay_min_ns", "delay_max_ns", "delay_decimation"};
 const std::vector<std::string> kSubspaceKeys = {"max_paths", "subspace_threshold"};
 
-/** Stores a bearing (any angle) as the front-half-plane candidate plus its mirror. */
-void setAoa(BearingResult& r, const AntennaArray& used, double theta, double std_rad)
+/** A linear array's bearing as its candidate in the front half-plane (others: wrapped). */
+double frontHalfPlane(const AntennaArray& used, double theta)
 {
     const bool linear = used.size() >= 2 && used.isLinear();
     theta = wrapAngle(theta);
-    if (linear && angleDistance(theta, used.broadside()) > M_PI / 2) theta = used.mirrorOf(theta);
+    return linear && angleDistance(theta, used.broadside()) > M_PI / 2 ? used.mirrorOf(theta)
+                                                                       : theta;
+}
+
+/** Stores a bearing (any angle) as the front-half-plane candidate plus its mirror, with no
+ *  alternative (its direction's σ the same). */
+void setAoa(BearingResult& r, const AntennaArray& used, double theta, double std_rad)
+{
+    const bool linear = used.size() >= 2 && used.isLinear();
+    theta = frontHalfPlane(used, theta);
     r.aoa_rad = theta;
     r.aoaStd_rad = std_rad;
+    r.aoaDirectionStd_rad = std_rad;
+    r.hasAoaAlternative = false;
     r.aoaAmbiguous = linear;
     r.aoaMirror_rad = linear ? used.mirrorOf(theta) : theta;
 }
@@ -172,8 +183,17 @@ protected:
         const double sd = bearingStd(
             rx_, n, theta, R, gf_, gc_, snapshotsPerSubcarrier(frames), r.quality,
             opts_.stdFloor_deg * M_PI / 180);
-        const double amb = ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality);
+        Alternative alternative;
+        const double amb =
+            ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality, &alternative);
         setAoa(r, rx_, theta, std::min(std::sqrt(sd * sd + amb * amb), M_PI / 2));
+        r.aoaDirectionStd_rad = std::min(sd, r.aoaStd_rad);
+        if (alternative.weight > 0)
+        {
+            r.hasAoaAlternative = true;
+            r.aoaAlternative_rad = frontHalfPlane(rx_, alternative.theta_rad);
+            r.aoaAlternativeWeight = alternative.weight;
+        }
         r.framesUsed = unsigned(frames.size());
         r.valid = true;
     }
@@ -196,17 +216,25 @@ protected:
      *  kAmbiguityScale · distance · w: a frame with two comparable candidates says so with a σ
      *  that reaches the other one instead of a confident value that may be the wrong one, and
      *  a clean path stays sharp. Constants chosen on the development rooms only. */
-    double ambiguityStd(double theta, const std::vector<Eigen::MatrixXcd>& R, double quality)
+    /** The candidate that set ambiguityStd's σ (weight 0: none). */
+    struct Alternative
+    {
+        double theta_rad = 0;
+        double weight = 0;  //!< w above
+    };
+    double ambiguityStd(
+        double theta, const std::vector<Eigen::MatrixXcd>& R, double quality,
+        Alternative* alternative = nullptr)
     {
         return ambiguityStdOn(
-            rx_, grid_, qf_, fastGroupedForm(theta, R), theta, R, quality, ambSpec_);
+            rx_, grid_, qf_, fastGroupedForm(theta, R), theta, R, quality, ambSpec_, alternative);
     }
     /** The same on any array (the transmitter's for AoD): `powerAtTheta` is the grouped
      *  Bartlett power of `theta` on `R`, `spectrum` scratch space for qf's scan. */
     double ambiguityStdOn(
         const AntennaArray& array, const AngleGrid& grid, QuadraticFormGrid& qf,
         double powerAtTheta, double theta, const std::vector<Eigen::MatrixXcd>& R, double quality,
-        Eigen::VectorXd& spectrum) const
+        Eigen::VectorXd& spectrum, Alternative* alternative = nullptr) const
     {
         constexpr double kMargin = 0.5, kAmbiguityScale = 0.5;
         qf.evaluate(R, spectrum);
@@ -222,7 +250,11 @@ protected:
             if (d < beam) continue;
             const double rho = spectrum[Eigen::Index(i)] / pMax;
             const double w = std::clamp(1 - (1 - rho) / spread, 0.0, 1.0);
-            sigma = std::max(sigma, kAmbiguityScale * d * w);
+            if (kAmbiguityScale * d * w > sigma)
+            {
+                sigma = kAmbiguityScale * d * w;
+                if (alternative) *alternative = {grid.angles[i], w};
+            }
         }
         return sigma;
     }
@@ -481,6 +513,7 @@ protected:
     static void widenByDrift(BearingResult& r, double drift)
     {
         r.aoaStd_rad = std::min(std::hypot(r.aoaStd_rad, drift), M_PI / 2);
+        r.aoaDirectionStd_rad = std::min(std::hypot(r.aoaDirectionStd_rad, drift), M_PI / 2);
     }
 
     void keep2D(const Eigen::MatrixXf& P, const std::string& label, double theta, double delay)

@@ -34,6 +34,11 @@ struct GraphSlamOptions
     double bearingDecorrelation_m = 0.5;
 
     bool useAoa = true, useAod = true;
+    /** An AoA with an alternative direction (BearingRecord::hasAoaAlternative) explains a pose
+     *  by whichever of its directions is closer, with each direction's own σ (a max-mixture);
+     *  false: one direction with the σ that reaches both. The localization apps set it from
+     *  the map's aoa_alternative_share. */
+    bool useAoaAlternatives = false;
     double minStd_rad = 0.0349;  //!< floor on bearing σ (2°)
     double stdScale = 1.0;
     std::string loss = "cauchy";  //!< robust loss of bearing edges: cauchy | huber | none

@@ -24,6 +24,11 @@ struct RobustBearingModel
     double minStd_rad = 0.0349;  //!< σ_min (2°)
     double stdScale = 1.0;       //!< inflates reported σ (errors are correlated in space)
     double maxStd_rad = 0.785;   //!< measurements with σ above this are ignored (45°)
+    /** > 0: an AoA with an alternative direction (BearingRecord::hasAoaAlternative) is a
+     *  mixture of its two directions, each with its own σ (aoaDirectionStd), the alternative
+     *  weighing this × its weight (at most ½); 0: one direction with the σ that reaches both
+     *  (aoaStd), which a window near endfire makes too wide to use. */
+    double aoaAlternativeShare = 0;
 
     double sigma(double reportedStd) const { return std::max(minStd_rad, stdScale * reportedStd); }
     /** log p(r) for a wrapped residual r and effective σ. */
@@ -76,9 +81,26 @@ struct BearingUse
 
 /** Whether a record has an angle the model weighs: one that `use` selects, with a σ of at most
  *  max_std. recordLogLikelihood() and recordAgrees() use only these angles. */
+/** The mirror of `r`'s AoA alternative across the linear array's axis (which lies halfway
+ *  between aoa and aoaMirror); meaningful when aoaAmbiguous. */
+inline double aoaAlternativeMirror(const BearingRecord& r)
+{
+    return wrapToPi(r.aoa + r.aoaMirror - r.aoaAlternative);
+}
+/** Whether `model` weighs `r`'s AoA as a mixture of its two directions. */
+inline bool usesAoaAlternative(const BearingRecord& r, const RobustBearingModel& model)
+{
+    return model.aoaAlternativeShare > 0 && r.hasAoaAlternative;
+}
+/** The reported σ `model` takes for `r`'s AoA: each direction's own with an alternative it
+ *  uses, else the one that covers all. */
+inline double aoaStdUsed(const BearingRecord& r, const RobustBearingModel& model)
+{
+    return usesAoaAlternative(r, model) ? r.aoaDirectionStd : r.aoaStd;
+}
 inline bool usesAoa(const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
 {
-    return use.aoa && r.hasAoa && r.aoaStd <= model.maxStd_rad;
+    return use.aoa && r.hasAoa && aoaStdUsed(r, model) <= model.maxStd_rad;
 }
 inline bool usesAod(const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
 {

@@ -29,6 +29,10 @@ struct BearingRecord
     double aoa = 0, aoaStd = 0;
     bool aoaAmbiguous = false;
     double aoaMirror = 0;
+    /** A second direction the window supports about as well (CObservationWiFiBearing's
+     *  alternative): then aoaStd reaches it, and aoaDirectionStd is each direction's own σ. */
+    bool hasAoaAlternative = false;
+    double aoaAlternative = 0, aoaAlternativeWeight = 0, aoaDirectionStd = 0;
 
     bool hasAod = false;
     double aod = 0, aodStd = 0;
@@ -74,7 +78,8 @@ struct InputWarnings
  *  at least one of `aoa_deg` / `aod_deg`; columns may come in any order; an empty cell means "not
  *  measured"; `*_mirror_deg` non-empty marks the angle ambiguous (linear array). Optional 0/1
  *  columns `has_aoa`, `has_aod`, `aoa_ambiguous`, `aod_ambiguous` (as `csi-bearings --csv`
- *  writes them) switch the corresponding cells off when 0.
+ *  writes them) switch the corresponding cells off when 0. Optional `aoa_alt_deg`,
+ *  `aoa_alt_weight` and `aoa_direction_std_deg` (all three filled) give the AoA's alternative.
  *  Throws std::runtime_error with file:line on malformed rows and unknown transmitter names
  *  (names can't be guessed); rows without any angle are counted in `warnings`. */
 std::vector<BearingRecord> readBearingCsv(

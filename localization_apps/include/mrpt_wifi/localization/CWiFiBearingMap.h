@@ -42,6 +42,8 @@ namespace mrpt_wifi
  * std_scale = 1.0
  * max_std_deg = 45
  * bearing_weight = 1   ; (0, 1]: tempers each bearing's log-likelihood (see bearingWeight)
+ * aoa_alternative_share = 0   ; [0, 0.5]: > 0 weighs a bearing's alternative direction too
+ *                             ; (RobustBearingModel::aoaAlternativeShare)
  * \endcode
  * The map is read-only: inserting observations does nothing (it is built from the file).
  *

@@ -19,7 +19,15 @@ namespace mrpt_wifi
  *
  * Linear arrays cannot tell an angle from its mirror across the array axis: then `aoaAmbiguous`
  * is set and `aoaMirror_rad` holds the other candidate, equally consistent with the CSI
- * (`aoa_rad` is the one in the array's front half-plane, not a better guess). Same for AoD. */
+ * (`aoa_rad` is the one in the array's front half-plane, not a better guess). Same for AoD.
+ *
+ * A window that can't tell its direction from another one (near endfire the rt-ac86u's 26 mm
+ * spacing aliases the other endfire) has `hasAoaAlternative`: `aoaAlternative_rad` (folded as
+ * aoa_rad, its mirror the array's mirror of it) came within `aoaAlternativeWeight` (0..1] of
+ * the chosen one, and `aoaStd_rad` reaches it. `aoaDirectionStd_rad` is the σ of aoa_rad's own
+ * direction, given it is the right one: a consumer may weigh both directions as a mixture with
+ * that σ instead of one wide σ (bearing::BearingResult). Without an alternative it equals
+ * aoaStd_rad. Stored since serialization version 1 (older rawlogs read as none). */
 class CObservationWiFiBearing : public mrpt::obs::CObservation
 {
     DEFINE_SERIALIZABLE(CObservationWiFiBearing, mrpt_wifi)
@@ -38,6 +46,10 @@ public:
     double aoaStd_rad = 0;
     bool aoaAmbiguous = false;
     double aoaMirror_rad = 0;
+    bool hasAoaAlternative = false;
+    double aoaAlternative_rad = 0;
+    double aoaAlternativeWeight = 0;
+    double aoaDirectionStd_rad = 0;
 
     bool hasAod = false;
     double aod_rad = 0;

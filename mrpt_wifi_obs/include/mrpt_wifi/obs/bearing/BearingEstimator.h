@@ -28,6 +28,16 @@ struct BearingResult
      *  CSI equally well. aoa_rad is the candidate in the array's front half-plane. */
     double aoaMirror_rad = 0;
     bool aoaAmbiguous = false;
+    /** A second direction the window's CSI supports about as well (near endfire the
+     *  rt-ac86u's 26 mm spacing aliases the other endfire), folded like aoa_rad; aoaStd_rad
+     *  reaches it. aoaAlternativeWeight (0..1]: how close it came (1: as strong as aoa_rad).
+     *  aoaDirectionStd_rad: σ of aoa_rad's own direction, given it is the right one (for a
+     *  consumer that weighs both, e.g. as a mixture). Without an alternative: none, and
+     *  aoaDirectionStd_rad == aoaStd_rad. */
+    bool hasAoaAlternative = false;
+    double aoaAlternative_rad = 0;
+    double aoaAlternativeWeight = 0;
+    double aoaDirectionStd_rad = 0;
 
     bool hasAod = false;
     double aod_rad = 0;
