@@ -389,7 +389,7 @@ GraphSlamResult solveOnce(
     const auto decorrelated = [&](const BearingRecord& b, double s)
     { return sigma(s) * decorrelation.factor(b.transmitter); };
     const auto aoaStd = [&](const BearingRecord& b)
-    { return detail::aoaStdFor(b, opt.useAoaAlternatives); };
+    { return aoaStdFor(b, opt.useAoaAlternatives); };
     std::vector<bool> apUsed(A.size(), false), apAod(A.size(), false);
     std::vector<std::pair<ceres::ResidualBlockId, double>> bearingBlocks;  // with σ
     for (const auto& a : att)

@@ -26,19 +26,13 @@ double recordLogLikelihood(
         // Each direction with its mirror, as logLikelihood() weighs one.
         const double sigma = model.sigma(r.aoaDirectionStd);
         const double predicted = predictAoa(s, tx.pose.x, tx.pose.y);
-        const auto density = [&](double z, bool ambiguous, double mirror)
-        {
-            const auto g = [&](double m)
-            {
-                const double q = wrapToPi(predicted - m) / sigma;
-                return std::exp(-0.5 * q * q);
-            };
-            return (ambiguous ? 0.5 * (g(z) + g(mirror)) : g(z)) / (sigma * 2.5066282746310002);
-        };
         const double share = std::min(0.5, model.aoaAlternativeShare * r.aoaAlternativeWeight);
-        const double g = (1 - share) * density(r.aoa, r.aoaAmbiguous, r.aoaMirror) +
-                         share * density(r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r));
-        ll += std::log((1 - model.outlierProb) * g + model.outlierProb * 0.15915494309189535);
+        ll += model.logOfInlierDensity(
+            (1 - share) *
+                model.inlierDensity(predicted, r.aoa, r.aoaAmbiguous, r.aoaMirror, sigma) +
+            share *
+                model.inlierDensity(
+                    predicted, r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r), sigma));
     }
     else if (usesAoa(r, model, use))
         ll += model.logLikelihood(

@@ -128,12 +128,6 @@ inline AoaResidual aoaResidualOf(
     return r;
 }
 
-/** The reported σ a solver takes for `b`'s AoA (see aoaResidualOf). */
-inline double aoaStdFor(const BearingRecord& b, bool alternatives)
-{
-    return alternatives && b.hasAoaAlternative ? b.aoaDirectionStd : b.aoaStd;
-}
-
 /** AoD at the transmitter (ap = x, y, yaw): direction of the receive array in its frame. */
 struct AodResidual
 {

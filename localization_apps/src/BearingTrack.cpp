@@ -169,8 +169,7 @@ TrackResult solveBearingTrack(
 
     const auto sigmaOf = [&](const Use& u)
     {
-        const double reported =
-            u.departure ? u.b->aodStd : detail::aoaStdFor(*u.b, opt.useAoaAlternatives);
+        const double reported = u.departure ? u.b->aodStd : aoaStdFor(*u.b, opt.useAoaAlternatives);
         return std::max(opt.minStd_rad, opt.stdScale * reported);
     };
 

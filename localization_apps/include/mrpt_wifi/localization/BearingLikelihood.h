@@ -35,19 +35,31 @@ struct RobustBearingModel
     double logLikelihood(double residual, double sigma) const
     {
         const double r = residual / sigma;
-        const double g = std::exp(-0.5 * r * r) / (sigma * 2.5066282746310002);
-        return std::log((1 - outlierProb) * g + outlierProb * 0.15915494309189535);
+        return logOfInlierDensity(std::exp(-0.5 * r * r) / (sigma * 2.5066282746310002));
+    }
+    /** The Gaussian density of a measurement (averaged with its mirror if ambiguous) given the
+     *  predicted angle, without the outliers. */
+    static double inlierDensity(
+        double predicted, double measured, bool ambiguous, double mirror, double sigma)
+    {
+        const auto g = [&](double z)
+        {
+            const double r = wrapToPi(predicted - z) / sigma;
+            return std::exp(-0.5 * r * r);
+        };
+        return (ambiguous ? 0.5 * (g(measured) + g(mirror)) : g(measured)) /
+               (sigma * 2.5066282746310002);
+    }
+    /** log p of a measurement whose Gaussian part has `density`: the outliers added. */
+    double logOfInlierDensity(double density) const
+    {
+        return std::log((1 - outlierProb) * density + outlierProb * 0.15915494309189535);
     }
     /** log p of a measurement (and its mirror if ambiguous) given the predicted angle. */
     double logLikelihood(
         double predicted, double measured, bool ambiguous, double mirror, double sigma) const
     {
-        if (!ambiguous) return logLikelihood(wrapToPi(predicted - measured), sigma);
-        const double r1 = wrapToPi(predicted - measured) / sigma;
-        const double r2 = wrapToPi(predicted - mirror) / sigma;
-        const double g = 0.5 * (std::exp(-0.5 * r1 * r1) + std::exp(-0.5 * r2 * r2)) /
-                         (sigma * 2.5066282746310002);
-        return std::log((1 - outlierProb) * g + outlierProb * 0.15915494309189535);
+        return logOfInlierDensity(inlierDensity(predicted, measured, ambiguous, mirror, sigma));
     }
 };
 
@@ -92,11 +104,16 @@ inline bool usesAoaAlternative(const BearingRecord& r, const RobustBearingModel&
 {
     return model.aoaAlternativeShare > 0 && r.hasAoaAlternative;
 }
-/** The reported σ `model` takes for `r`'s AoA: each direction's own with an alternative it
- *  uses, else the one that covers all. */
+/** The reported σ of `r`'s AoA: each direction's own when `alternatives` are weighed and r
+ *  has one, else the one that covers all. */
+inline double aoaStdFor(const BearingRecord& r, bool alternatives)
+{
+    return alternatives && r.hasAoaAlternative ? r.aoaDirectionStd : r.aoaStd;
+}
+/** The reported σ `model` takes for `r`'s AoA (aoaStdFor). */
 inline double aoaStdUsed(const BearingRecord& r, const RobustBearingModel& model)
 {
-    return usesAoaAlternative(r, model) ? r.aoaDirectionStd : r.aoaStd;
+    return aoaStdFor(r, model.aoaAlternativeShare > 0);
 }
 inline bool usesAoa(const BearingRecord& r, const RobustBearingModel& model, const BearingUse& use)
 {
