@@ -24,6 +24,9 @@ struct TrackFromTruth
 {
     std::vector<double> newestErrors_m;  //!< error of each solve's newest node (the estimate)
     double median_m = NAN;               //!< NaN when no window could be solved
+    /** The median over the windows a full track_window_s long only (the smoother's steady
+     *  state, as after a filter converged; the first windows hold less): NaN when none. */
+    double fullWindowMedian_m = NAN;
 };
 
 /** Every `step_s` from `options.minWindow_s` after the first true pose on, the track of the
@@ -40,6 +43,7 @@ inline TrackFromTruth trackFromTruth(
     using namespace localization;
     TrackFromTruth out;
     if (truth.size() < 2) return out;
+    std::vector<double> fullWindowErrors_m;
     for (double t1 = truth.t.front() + options.minWindow_s; t1 <= truth.t.back(); t1 += step_s)
     {
         TrackInput in;
@@ -67,8 +71,12 @@ inline TrackFromTruth trackFromTruth(
         if (!truth.interpolate(r.poses.t.back(), g)) continue;
         const auto& p = r.poses.poses.back();
         out.newestErrors_m.push_back(std::hypot(p.x - g.x, p.y - g.y));
+        if (t1 - truth.t.front() >= options.trackWindow_s)
+            fullWindowErrors_m.push_back(out.newestErrors_m.back());
     }
     if (!out.newestErrors_m.empty()) out.median_m = computeStats(out.newestErrors_m).median;
+    if (!fullWindowErrors_m.empty())
+        out.fullWindowMedian_m = computeStats(fullWindowErrors_m).median;
     return out;
 }
 

@@ -79,6 +79,21 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // targets are tighter; these bounds catch a broken chain, not a small regression).
     EXPECT_LE(number(room, "offline_odo_median_m"), 1.0) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "offline_noodo_worst_all_m"))) << r.output;
+    // Offline, three filter seeds per run (the default): the room's figure is their median.
+    for (const std::string run : {"odo", "noodo"})
+    {
+        std::string cell = room.at("offline_" + run + "_runs_m");
+        cell.erase(std::remove(cell.begin(), cell.end(), '"'), cell.end());
+        std::vector<double> runs;
+        std::istringstream s(cell);
+        for (std::string v; std::getline(s, v, ';');) runs.push_back(std::stod(v));
+        ASSERT_EQ(runs.size(), 3u) << run << ": " << cell;
+        std::sort(runs.begin(), runs.end());
+        EXPECT_DOUBLE_EQ(runs[1], number(room, "offline_" + run + "_median_m"))
+            << run << ": " << cell;
+    }
+    EXPECT_TRUE(
+        std::filesystem::exists(tmp.file("work/room-7/pf-odometry-seed3/estimate_tum.txt")));
     // Live runs on the wall clock (a busy machine batches more bearings per filter step): only
     // that both ran on the streamed room and, with odometry, stayed near it (7.1 × 7.7 m).
     EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
@@ -130,8 +145,21 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     ASSERT_EQ(again.exitCode, 0) << again.output;
     std::ostringstream row;
     row << "| 7 | " << std::fixed << std::setprecision(2) << fromTruth << " |";
-    EXPECT_NE(again.output.find(row.str()), std::string::npos) << again.output;
+    const auto at = again.output.find(row.str());
+    ASSERT_NE(at, std::string::npos) << again.output;
     EXPECT_NE(again.output.find("within 0.3 m: "), std::string::npos) << again.output;
+    // ... and against the sweep's error with odometry (its rooms.csv): the row ends with the
+    // ratio of the full windows' median to it, and the rooms within 2× are counted.
+    std::ostringstream ratio;
+    ratio << "| " << std::fixed << std::setprecision(1)
+          << number(room, "noodo_track_full_windows_m") / number(room, "offline_odo_median_m")
+          << " |\n";
+    const auto line = again.output.substr(at, again.output.find('\n', at) - at + 1);
+    EXPECT_GE(line.size(), ratio.str().size());
+    EXPECT_EQ(line.substr(line.size() - std::min(line.size(), ratio.str().size())), ratio.str())
+        << line;
+    EXPECT_NE(again.output.find("within 2× of the error with odometry: "), std::string::npos)
+        << again.output;
 }
 
 TEST(LocalizationAccuracy, WithAodCalibratesEveryApAndUsesItsAod)

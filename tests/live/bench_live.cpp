@@ -2,8 +2,9 @@
 // Benchmark of wifi-localize's filter at the issue-11 input rate: 4 APs × 100 bearings/s.
 // One iteration = the LiveLocalizer steps with the bearings of `range(1)` ms (odometry + MRPT's
 // particle filter with CWiFiBearingMap, the shipped wifi-localize-emulator.ini's settings,
-// range(0) particles). realtime_factor = data time / compute time: > 1 keeps up; the pose
-// output rate is 1000 / range(1) Hz, the added lag one step's time.
+// range(0) particles; range(2) = 0: without odometry, the unknown-motion model and the track
+// solves). realtime_factor = data time / compute time: > 1 keeps up; the pose output rate is
+// 1000 / range(1) Hz, the added lag one step's time.
 #include <benchmark/benchmark.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/vector_loadsave.h>
@@ -44,13 +45,14 @@ static void BM_LiveLocalizerStep(benchmark::State& state)
     auto bearings = w.bearings;
     for (auto& b : bearings) b.transmitter = macOf.at(b.transmitter);
     const double stepData_s = double(state.range(1)) * 1e-3;
+    const bool withOdometry = state.range(2) != 0;
     size_t next = 0, odo = 0;
     double t = w.bearings.front().t;
     for (auto _ : state)
     {
         t += stepData_s;
         if (next >= w.bearings.size()) next = 0, odo = 0, t = w.bearings.front().t + stepData_s;
-        while (odo < w.odometry.size() && w.odometry.t[odo] <= t)
+        while (withOdometry && odo < w.odometry.size() && w.odometry.t[odo] <= t)
         {
             mrpt::obs::CObservationOdometry o;
             o.odometry = mrpt::poses::CPose2D(w.odometry.poses[odo++]);
@@ -67,9 +69,11 @@ static void BM_LiveLocalizerStep(benchmark::State& state)
     state.counters["poses_per_s_of_data"] = 1.0 / stepData_s;
 }
 BENCHMARK(BM_LiveLocalizerStep)
-    ->Args({3000, 50})
-    ->Args({3000, 20})
-    ->Args({5000, 50})
+    ->ArgNames({"particles", "step_ms", "odometry"})
+    ->Args({3000, 50, 1})
+    ->Args({3000, 20, 1})
+    ->Args({5000, 50, 1})
+    ->Args({3000, 50, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK_MAIN();
