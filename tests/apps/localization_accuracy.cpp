@@ -509,13 +509,12 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
         }
         if (runs.empty()) continue;
         // The median run (the lower middle of an even count), never-converged runs last.
-        std::vector<size_t> order(runs.size());
-        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-        std::sort(
-            order.begin(), order.end(),
-            [&](size_t a, size_t b)
-            { return kidnappedMedian(runs[a]) < kidnappedMedian(runs[b]); });
-        room.kidnapped[0][odo] = runs[order[(order.size() - 1) / 2]];
+        const auto middle = runs.begin() + std::ptrdiff_t(runs.size() - 1) / 2;
+        std::nth_element(
+            runs.begin(), middle, runs.end(),
+            [](const KidnappedFigures& a, const KidnappedFigures& b)
+            { return kidnappedMedian(a) < kidnappedMedian(b); });
+        room.kidnapped[0][odo] = std::move(*middle);
     }
 }
 
@@ -1246,10 +1245,11 @@ int reportTrackFromTruth(const fs::path& work)
             const auto t = trackFromTruthOfRoom(dir);
             const auto stats = computeStats(t.newestErrors_m);
             const auto odo = odometry.find(seed);
-            const double ratio = odo != odometry.end() && odo->second > 0 &&
-                                         std::isfinite(odo->second) && stats.count
-                                     ? t.fullWindowMedian_m / odo->second
-                                     : NAN;
+            // NaN without the sweep's figure, or when it never converged with odometry.
+            const double ratio =
+                odo != odometry.end() && odo->second > 0 && std::isfinite(odo->second)
+                    ? t.fullWindowMedian_m / odo->second
+                    : NAN;
             std::cout << "| " << seed << " | " << fmt(t.median_m) << " | "
                       << fmt(stats.count ? stats.p90 : NAN) << " | " << stats.count << " | "
                       << fmt(t.fullWindowMedian_m) << " | " << fmt(ratio, 1) << " |\n";
