@@ -63,7 +63,8 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     test::TempDir tmp;
     const auto r = test::run(
         test::binDir() +
-        "/localization-accuracy --rooms 1 --first-seed 7 -d 40 --laps 2 -n 1000 -w " +
+        "/localization-accuracy --rooms 1 --first-seed 7 -d 40 --laps 2 -n 1000 --live-seeds 2 "
+        "-w " +
         tmp.file("work"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     // Progress per room, the per-room table, the targets and the list of rooms that miss one.
@@ -79,21 +80,39 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // targets are tighter; these bounds catch a broken chain, not a small regression).
     EXPECT_LE(number(room, "offline_odo_median_m"), 1.0) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "offline_noodo_worst_all_m"))) << r.output;
-    // Offline, three filter seeds per run (the default): the room's figure is their median.
-    for (const std::string run : {"odo", "noodo"})
+    // Offline, three filter seeds per run (the default), live two (--live-seeds 2): the room's
+    // figure is their median (of two, the lower).
+    const auto perRun = [&](const std::string& column)
     {
-        std::string cell = room.at("offline_" + run + "_runs_m");
+        std::string cell = room.at(column);
         cell.erase(std::remove(cell.begin(), cell.end(), '"'), cell.end());
         std::vector<double> runs;
         std::istringstream s(cell);
         for (std::string v; std::getline(s, v, ';');) runs.push_back(std::stod(v));
-        ASSERT_EQ(runs.size(), 3u) << run << ": " << cell;
-        std::sort(runs.begin(), runs.end());
-        EXPECT_DOUBLE_EQ(runs[1], number(room, "offline_" + run + "_median_m"))
-            << run << ": " << cell;
+        return runs;
+    };
+    for (const std::string kind : {"offline", "live"})
+        for (const std::string run : {"odo", "noodo"})
+        {
+            auto runs = perRun(kind + "_" + run + "_runs_m");
+            ASSERT_EQ(runs.size(), kind == "offline" ? 3u : 2u) << kind << " " << run;
+            std::sort(runs.begin(), runs.end());
+            EXPECT_DOUBLE_EQ(
+                runs[kind == "offline" ? 1 : 0], number(room, kind + "_" + run + "_median_m"))
+                << kind << " " << run;
+        }
+    // Each live run's lag, from its wifi-localize summary: known, and a run can't be ahead of
+    // its own bearings.
+    for (const std::string run : {"odo", "noodo"})
+    {
+        const auto lags = perRun("live_" + run + "_lag_p99_ms");
+        ASSERT_EQ(lags.size(), 2u) << run;
+        for (const double lag : lags) EXPECT_GE(lag, 0.0) << run;
     }
     EXPECT_TRUE(
         std::filesystem::exists(tmp.file("work/room-7/pf-odometry-seed3/estimate_tum.txt")));
+    EXPECT_TRUE(
+        std::filesystem::exists(tmp.file("work/room-7/live-no-odometry-seed2/estimate_tum.txt")));
     // Live runs on the wall clock (a busy machine batches more bearings per filter step): only
     // that both ran on the streamed room and, with odometry, stayed near it (7.1 × 7.7 m).
     EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
@@ -170,7 +189,7 @@ TEST(LocalizationAccuracy, WithAodCalibratesEveryApAndUsesItsAod)
     const auto r = test::run(
         test::binDir() +
         "/localization-accuracy --rooms 1 --first-seed 7 -d 20 --laps 2 -n 1000 --ap-streams 4 "
-        "--aod -w " +
+        "--aod --live-seeds 1 -w " +
         tmp.file("work"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(r.output.find("4-antenna line"), std::string::npos) << r.output;
@@ -227,7 +246,7 @@ TEST(LocalizationAccuracy, BadArgumentsAreNamedWithoutRunningARoom)
         test::binDir() + "/localization-accuracy --rooms 1 --track-from-truth " + tmp.file("w"));
     EXPECT_NE(both.exitCode, 0);
     EXPECT_NE(both.output.find("--rooms"), std::string::npos) << both.output;
-    for (const char* args : {"--ap-streams 3", "--aod"})
+    for (const char* args : {"--ap-streams 3", "--aod", "--live-seeds 0", "--offline-seeds 0"})
     {
         const auto bad = test::run(
             test::binDir() + "/localization-accuracy --rooms 1 " + args + " -w " +
