@@ -41,6 +41,7 @@
 #include <future>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
