@@ -9,6 +9,7 @@
 #include <mrpt/apps/MonteCarloLocalization_App.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/core/bits_math.h>
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/random/RandomGenerators.h>
@@ -534,6 +535,13 @@ int main(int argc, char** argv)
                                       ")")
                 << "\n"
                 << "  warnings       : " << warn.summary() << "\n"
+                << "  sharp bearings : "
+                << sharpCoverage(
+                       usable, wifiMap->likelihoodOptions.use,
+                       mrpt::DEG2RAD(recoveryOptions.maxStd_deg))
+                       .asString()
+                << " (sigma <= " << recoveryOptions.maxStd_deg
+                << " deg, [ParticleRecovery] max_std_deg; without odometry a pose needs 3)\n"
                 << "  particles      : " << counts << "\n"
                 << "  filter steps   : " << app.steps << " in " << fmt(runTime, 2) << " s ("
                 << fmt(app.steps / std::max(runTime, 1e-9), 1) << " steps/s)\n"

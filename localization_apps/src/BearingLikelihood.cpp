@@ -4,7 +4,10 @@
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <set>
 
 namespace mrpt_wifi::localization
 {
@@ -105,6 +108,48 @@ mrpt::math::CMatrixDouble33 bearingBiasCovariance(
     mrpt::math::CMatrixDouble33 cov;
     cov.asEigen() = info.inverse();
     return cov;
+}
+
+size_t SharpCoverage::seconds() const
+{
+    return std::accumulate(secondsWith.begin(), secondsWith.end(), size_t(0));
+}
+
+double SharpCoverage::shareWithAtLeast(size_t transmitters) const
+{
+    const size_t from = std::clamp<size_t>(transmitters, 0, secondsWith.size() - 1);
+    const size_t n = std::accumulate(secondsWith.begin() + from, secondsWith.end(), size_t(0));
+    return seconds() ? double(n) / double(seconds()) : std::nan("");
+}
+
+std::string SharpCoverage::asString() const
+{
+    const auto percent = [&](size_t k)
+    { return mrpt::format("%.0f %%", 100.0 * double(secondsWith[k]) / double(seconds())); };
+    if (!seconds()) return "no bearings";
+    return "3+ transmitters with a sharp bearing in " + percent(3) + " of " +
+           std::to_string(seconds()) + " s (2: " + percent(2) + ", 1: " + percent(1) +
+           ", 0: " + percent(0) + ")";
+}
+
+SharpCoverage sharpCoverage(
+    const std::vector<BearingRecord>& records, const BearingUse& use, double sharpStd_rad)
+{
+    SharpCoverage c;
+    if (records.empty()) return c;
+    const auto [first, last] = std::minmax_element(
+        records.begin(), records.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+    const double t0 = first->t;
+    if (!std::isfinite(last->t - t0)) return c;
+    std::vector<std::set<MacAddress>> sharpIn(size_t(std::floor(last->t - t0)) + 1);
+    for (const auto& r : records)
+    {
+        const bool sharp = (use.aoa && r.hasAoa && r.aoaStd <= sharpStd_rad) ||
+                           (use.aod && r.hasAod && r.aodStd <= sharpStd_rad);
+        if (sharp) sharpIn[size_t(std::floor(r.t - t0))].insert(r.transmitter);
+    }
+    for (const auto& s : sharpIn) ++c.secondsWith[std::min(s.size(), c.secondsWith.size() - 1)];
+    return c;
 }
 
 }  // namespace mrpt_wifi::localization

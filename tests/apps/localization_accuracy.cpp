@@ -146,15 +146,30 @@ std::vector<std::array<double, 3>> readEstimateCovariances(const fs::path& csv)
     return out;
 }
 
+/** The number captured by `pattern`'s first group in a program's summary.txt; NaN without the
+ *  file or a match. */
+double numberInSummary(const fs::path& summary, const std::string& pattern)
+{
+    std::smatch m;
+    const std::string text = fs::exists(summary) ? test::readFile(summary.string()) : "";
+    return std::regex_search(text, m, std::regex(pattern)) ? std::stod(m[1]) : NAN;
+}
+
 /** The 99th percentile of the lag in wifi-localize's summary.txt ("lag [ms] : p50 …, p99 …")
  *  [ms]; NaN without it. */
 double liveLagP99_ms(const fs::path& summary)
 {
-    std::smatch m;
-    const std::string text = fs::exists(summary) ? test::readFile(summary.string()) : "";
-    return std::regex_search(text, m, std::regex(R"(lag \[ms\]\s*: p50 [0-9.]+, p99 ([0-9.]+))"))
-               ? std::stod(m[1])
-               : NAN;
+    return numberInSummary(summary, R"(lag \[ms\]\s*: p50 [0-9.]+, p99 ([0-9.]+))");
+}
+
+/** The share of seconds with 3+ transmitters sharp in wifi-pf-localization's summary.txt
+ *  ("sharp bearings : 3+ transmitters with a sharp bearing in N % of …"); NaN without it. */
+double sharp3Share(const fs::path& summary)
+{
+    return numberInSummary(
+               summary,
+               R"(sharp bearings : 3\+ transmitters with a sharp bearing in ([0-9.]+) %)") /
+           100;
 }
 
 KidnappedFigures kidnappedFigures(
@@ -283,6 +298,10 @@ struct Room
      *  kidnapped drive: median error of its newest node (trackFromTruthOfRoom). */
     double noOdoTrackFromTruth_m = NAN;
     double noOdoTrackFromTruthFull_m = NAN;  //!< the same over full windows only
+    /** Share of the kidnapped drive's seconds in which 3 or more APs gave a sharp bearing
+     *  without odometry (wifi-pf-localization's "sharp bearings"): a pose fixed by the bearings
+     *  alone needs 3. */
+    double noOdoSharp3Share = NAN;
     /** Offline kidnapped runs, [odometry?]: each filter seed's median error after convergence
      *  (∞: never converged); kidnapped[0][odo] is the median one's figures. */
     std::array<std::vector<double>, 2> offlineRuns_m;
@@ -538,6 +557,7 @@ void runOffline(Room& room, const fs::path& dir, const Options& o)
                 Trajectory2D::fromTumFile((out / "estimate_tum.txt").string()), room.kidnappedTruth,
                 o));
             room.offlineRuns_m[odo].push_back(kidnappedMedian(runs.back()));
+            if (odo == 1 && seed == 1) room.noOdoSharp3Share = sharp3Share(out / "summary.txt");
         }
         if (!runs.empty()) room.kidnapped[0][odo] = medianRun(std::move(runs));
     }
@@ -1036,6 +1056,11 @@ std::string whyItFails(const Room& r, const std::vector<Target>& ts)
             [&](const Target& t) { return t.figure.rfind(prefix, 0) == 0 && !passes(t, r); });
     };
     std::vector<std::string> why;
+    // How often the bearings alone fixed a pose, beside an information reason.
+    const std::string sharpSeconds =
+        std::isnan(r.noOdoSharp3Share) ? std::string()
+                                       : "; 3 or more APs with a sharp bearing in " +
+                                             fmt(100 * r.noOdoSharp3Share, 0) + " % of its seconds";
     if (r.apMinSeparation_m < 1.5 || r.apTriangle < 0.15)
         why.push_back(
             "geometry (APs " + fmt(r.apMinSeparation_m, 1) + " m apart at the closest, triangle " +
@@ -1059,7 +1084,7 @@ std::string whyItFails(const Room& r, const std::vector<Target>& ts)
     if (noOdoMisses && r.noOdoTrackFromTruth_m > 0.3)
         why.push_back(
             "information (without odometry a track fitted from the true poses is itself " +
-            fmt(r.noOdoTrackFromTruth_m) + " m off at its newest pose)");
+            fmt(r.noOdoTrackFromTruth_m) + " m off at its newest pose" + sharpSeconds + ")");
     // The same best case against the error with odometry: beyond 2× of it, so is the target.
     const double odoMedian = kidnappedMedian(r.kidnapped[0][0]);
     const double trackRatio = r.noOdoTrackFromTruthFull_m / odoMedian;
@@ -1067,7 +1092,8 @@ std::string whyItFails(const Room& r, const std::vector<Target>& ts)
     if (noOdoMedian > 2 * odoMedian && trackRatio > 2)
         why.push_back(
             "information (without odometry a track fitted from the true poses is itself " +
-            fmt(trackRatio, 1) + "× the error with odometry over its full windows)");
+            fmt(trackRatio, 1) + "× the error with odometry over its full windows" + sharpSeconds +
+            ")");
     // ... within 2× of it, the bearings held what the filter without odometry did not find.
     if (noOdoMedian > 2 * odoMedian && trackRatio <= 2)
         why.push_back(
@@ -1221,7 +1247,8 @@ void writeCsv(const std::vector<Room>& rooms, const std::string& path)
          "bearings,bearings_central,central_beyond30,all_beyond30,central_median_deg,"
          "central_beyond30_unflagged,"
          "random_drive_central_beyond30,loop_central_beyond30,noodo_track_from_truth_m,"
-         "noodo_track_full_windows_m,offline_odo_runs_m,offline_noodo_runs_m,live_odo_runs_m,"
+         "noodo_track_full_windows_m,noodo_sharp3_seconds,offline_odo_runs_m,offline_noodo_runs_m,"
+         "live_odo_runs_m,"
          "live_noodo_runs_m,live_odo_lag_p99_ms,live_noodo_lag_p99_ms,wall_s,failed_programs\n";
     for (const auto& r : rooms)
     {
@@ -1245,7 +1272,7 @@ void writeCsv(const std::vector<Room>& rooms, const std::string& path)
           << r.bearings.beyond30 << "," << r.bearings.centralMedian_deg << ","
           << r.bearings.centralBeyond30Unflagged << "," << r.bearingsOfDrive[0].centralBeyond30
           << "," << r.bearingsOfDrive[1].centralBeyond30 << "," << r.noOdoTrackFromTruth_m << ","
-          << r.noOdoTrackFromTruthFull_m;
+          << r.noOdoTrackFromTruthFull_m << "," << r.noOdoSharp3Share;
         for (const auto* perRun : {&r.offlineRuns_m, &r.liveRuns_m, &r.liveLagP99_ms})
             for (int odo = 0; odo < 2; ++odo)
             {

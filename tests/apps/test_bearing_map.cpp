@@ -515,6 +515,43 @@ TEST(ParticleRecovery, ReseedingJumpsCoverTheAreaUniformly)
         odo.poseChange.get()->GetRuntimeClass());
 }
 
+TEST(SharpCoverage, CountsTheTransmittersWithASharpBearingInEachSecond)
+{
+    // What tells a user a room can't be localized without odometry: a pose needs 3 sharp
+    // transmitters at once. Second 0: a and b sharp, c wide; second 1: a (twice), b and c
+    // sharp; second 2: nothing heard; second 3: d's AoD only.
+    const auto mac = [](int i)
+    { return MacAddress::fromString("02:00:00:00:0a:0" + std::to_string(i)); };
+    const auto aoa = [&](double t, int tx, double std_deg)
+    {
+        BearingRecord r;
+        r.t = 100 + t, r.transmitter = mac(tx), r.hasAoa = true, r.aoaStd = mrpt::DEG2RAD(std_deg);
+        return r;
+    };
+    BearingRecord aodOnly;
+    aodOnly.t = 103.5, aodOnly.transmitter = mac(4), aodOnly.hasAod = true;
+    aodOnly.aodStd = mrpt::DEG2RAD(4);
+    const std::vector<BearingRecord> records = {aoa(0.1, 1, 3), aoa(0.5, 2, 9), aoa(0.9, 3, 30),
+                                                aoa(1.2, 1, 2), aoa(1.4, 1, 2), aoa(1.6, 2, 5),
+                                                aoa(1.8, 3, 8), aodOnly};
+    const auto c = sharpCoverage(records, BearingUse{true, true}, mrpt::DEG2RAD(10));
+    EXPECT_EQ(c.seconds(), 4u);
+    EXPECT_EQ(c.secondsWith, (std::array<size_t, 4>{1, 1, 1, 1}));
+    EXPECT_DOUBLE_EQ(c.shareWithAtLeast(3), 0.25);
+    EXPECT_DOUBLE_EQ(c.shareWithAtLeast(2), 0.5);
+    EXPECT_EQ(
+        c.asString(),
+        "3+ transmitters with a sharp bearing in 25 % of 4 s (2: 25 %, 1: 25 %, 0: 25 %)");
+    // Angles the map does not weigh are not sharp: AoA only, d's second has none.
+    const auto aoaOnly = sharpCoverage(records, BearingUse{true, false}, mrpt::DEG2RAD(10));
+    EXPECT_EQ(aoaOnly.secondsWith, (std::array<size_t, 4>{2, 0, 1, 1}));
+    // A stricter σ: c's 8° no longer counts in second 1, and b's 9° not in second 0.
+    const auto strict = sharpCoverage(records, BearingUse{true, true}, mrpt::DEG2RAD(6));
+    EXPECT_EQ(strict.secondsWith, (std::array<size_t, 4>{1, 2, 1, 0}));
+    EXPECT_EQ(sharpCoverage({}, BearingUse{}, 1.0).asString(), "no bearings");
+    EXPECT_TRUE(std::isnan(sharpCoverage({}, BearingUse{}, 1.0).shareWithAtLeast(3)));
+}
+
 TEST(BearingBias, CovarianceIsTheInverseFisherInformationOfOneBearingPerTransmitter)
 {
     // The Jacobians of AoA and AoD (with the array off the robot's centre) checked by finite

@@ -3,6 +3,8 @@
  * the offline and live filters, graph SLAM, device map), its figures within generous bounds.
  * The full sweep is a command (share/localization/README.md, "Per-room evaluation"). */
 #include <gtest/gtest.h>
+#include <mrpt/core/bits_math.h>
+#include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 
 #include <algorithm>
@@ -155,6 +157,12 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     for (size_t i = 0; i < std::min(withOdo.size(), withoutOdo.size()); ++i)
         differ += withOdo[i].aoa != withoutOdo[i].aoa;
     EXPECT_GT(differ, 0u);
+    // How often those bearings fixed a pose on their own (3+ APs sharp in a second), as
+    // wifi-pf-localization's summary rounds it.
+    EXPECT_NEAR(
+        number(room, "noodo_sharp3_seconds"),
+        sharpCoverage(withoutOdo, BearingUse{}, mrpt::DEG2RAD(10.0)).shareWithAtLeast(3), 0.006)
+        << r.output;
     // The no-odometry track fitted from the true poses (its best case), in the CSV and again
     // from the recorded room alone.
     const double fromTruth = number(room, "noodo_track_from_truth_m");

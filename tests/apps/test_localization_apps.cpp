@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include "SyntheticWorld.h"
@@ -156,6 +157,12 @@ TEST(LocalizationAppsPf, WithoutOdometryTracksAMovingRobot)
     EXPECT_NE(
         noOdo.out.find("no odometry (constant velocity + random walk, max speed 0.6 m/s"),
         std::string::npos)
+        << noOdo.out;
+    // Every AP's bearings are 8° sharp: 3 or more transmitters in every second of the drive.
+    EXPECT_TRUE(std::regex_search(
+        mrpt_wifi::test::readFile(f.dir + "/pf-noodo/summary.txt"),
+        std::regex(
+            R"(sharp bearings : 3\+ transmitters with a sharp bearing in 100 % of 6[01] s)")))
         << noOdo.out;
     const double eOdo = medianError(f.dir + "/pf-odo/errors.csv", 15);
     const double eNo = medianError(f.dir + "/pf-noodo/errors.csv", 15);
