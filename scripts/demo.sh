@@ -53,13 +53,10 @@ sed -e "s|^login_host *=.*|login_host = 127.0.0.1|" -e "s|^login_port *=.*|login
 grep -E "CWiFiCSISensor" "$out/grabber.log" | cut -c1-200 | tail -4
 recording=$(ls "$out"/recording_*.rawlog)
 kill -TERM "$emulator_pid" 2>/dev/null || true; wait "$emulator_pid" 2>/dev/null || true
-sim_zero=$(python3 -c "import json; print(json.load(open('$out/router/summary.json'))['emulator']['unix_time_at_sim_zero'])")
 rawlog-edit -p "$lib/libmrpt_wifi_obs.so" --info -i "$recording" 2>/dev/null | grep -E "objects|labels"
 "$bin/csi-export" "$recording" --stats -q 2>/dev/null
-# The robot's true path during the recording: the scenario's truth, on the recording's clock.
-"$bin/wifi-sim" "$share/scenarios/kidnapped.yaml" /dev/null -t "$out/kidnapped_truth" -d $((record_s + 30)) -q >/dev/null
-awk -v z="$sim_zero" '/^#/ {print; next} {$1 = sprintf("%.6f", z + $1 - 1700000000); print}' \
-  "$out/kidnapped_truth/trajectory_tum.txt" >"$out/kidnapped_truth/trajectory_recording_clock.txt"
+# The robot's true path during the recording, on the recording's clock: the emulator writes it
+# (STATE_DIR/truth/trajectory_tum.txt) as it runs.
 
 echo "== 2. Calibrate: a 60 s drive of the same router (seed 7) near a transmitter at a known place"
 "$bin/wifi-sim" "$share/scenarios/calibration.yaml" "$out/calibration_drive.rawlog" --seed 7 -d 60 \
@@ -87,7 +84,7 @@ echo "== 3. Bearings: csi-bearings (AoA at the robot, AoD at the 4-antenna APs),
 
 echo "== 4. Kidnapped robot: wifi-pf-localization (MRPT's particle filter + CWiFiBearingMap)"
 "$bin/wifi-pf-localization" "$share/localization/pf-localization-wifi.ini" "$out/bearings.rawlog" \
-  -g "$out/kidnapped_truth/trajectory_recording_clock.txt" -o "$out/pf" -q | tail -12
+  -g "$out/router/truth/trajectory_tum.txt" -o "$out/pf" -q | tail -12
 
 echo "== 4b. Live: emulator (CSI + odometry on 127.0.0.1) -> wifi-localize --view, 30 s under Xvfb"
 live_s=${DEMO_LIVE_SECONDS:-30}
@@ -101,18 +98,15 @@ pids+=("$live_emulator")
 sed -e "/^\[WIFI_CSI\]/,/^\[/ s|^udp_port *=.*|udp_port = $csi_port|" \
     -e "/^\[ODOMETRY\]/,/^\[/ s|^udp_port *=.*|udp_port = $odo_port|" \
     -e "s|^bearing_array *=.*|bearing_array = $share/arrays/rt-ac86u.yaml|" \
-    -e "s|^bearing_tx_array *=.*|bearing_tx_array = $share/arrays/ap-linear-4.yaml|" \
+    -e "s|^bearing_tx_arrays\? *=.*|bearing_tx_arrays = $share/arrays/ap-linear-4.yaml|" \
     -e "s|^transmitters_file *=.*|transmitters_file = $share/localization/kidnapped-aps.yaml|" \
     -e "s|^;* *bearing_calibration *=.*|bearing_calibration = $out/calib|" \
     "$share/localization/wifi-localize-emulator.ini" >"$out/live/live.ini"
 xvfb-run -a -s "-screen 0 1280x800x24" "$bin/wifi-localize" -p "$lib/libmrpt_wifi_sensor.so" \
   "$out/live/live.ini" --view --screenshot "$out/live/live_view.png" -d "$live_s" -o "$out/live" -q
 kill -TERM "$live_emulator" 2>/dev/null || true; wait "$live_emulator" 2>/dev/null || true
-live_zero=$(python3 -c "import json; print(json.load(open('$out/live/router/summary.json'))['emulator']['unix_time_at_sim_zero'])")
-awk -v z="$live_zero" '/^#/ {print; next} {$1 = sprintf("%.6f", z + $1 - 1700000000); print}' \
-  "$out/kidnapped_truth/trajectory_tum.txt" >"$out/live/truth_live_clock.txt"
 # The live estimate against the truth (same summary as wifi-pf-localization's).
-python3 - "$out/live/estimate_tum.txt" "$out/live/truth_live_clock.txt" <<'PY'
+python3 - "$out/live/estimate_tum.txt" "$out/live/router/truth/trajectory_tum.txt" <<'PY'
 import bisect, math, statistics, sys
 load = lambda f: [list(map(float, l.split())) for l in open(f) if not l.startswith('#')]
 est, gt = load(sys.argv[1]), load(sys.argv[2]); gt_t = [g[0] for g in gt]

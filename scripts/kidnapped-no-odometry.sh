@@ -64,8 +64,6 @@ for seed in "$@"; do
   mn=$(sed -n 's/.*after converged:.*median=\([0-9.]*\).*/\1/p' pf-none-$seed/summary.txt)
   [ -n "$mo" ] && [ -n "$mn" ] && python3 -c "print('seed $seed: without / with odometry %.2fx' % ($mn / $mo))"
   [ $live = 1 ] || continue
-  sed "s/^seed: .*/seed: $seed/" scenarios/kidnapped-10hz.yaml > scenarios/kidnapped-10hz-$seed.yaml
-  grep -q "^seed: $seed$" scenarios/kidnapped-10hz-$seed.yaml || { echo "no seed key in kidnapped.yaml" >&2; exit 1; }
   for run in odometry none; do
     out=live-$run-$seed; rm -rf $out $out.state; mkdir -p $out.state
     read -r csiPort odoPort < <(python3 -c "
@@ -81,12 +79,13 @@ derive_ini(sys.argv[2], sys.argv[3], sys.argv[5:], drop=['ODOMETRY'] if sys.argv
       WIFI_CSI/udp_port=$csiPort ODOMETRY/udp_port=$odoPort \
       wifi-localize/bearing_algorithm=default wifi-localize/bearing_calibration="$(pwd)/calib$seed" \
       wifi-localize/bearing_array="$src/share/arrays/rt-ac86u.yaml" \
-      wifi-localize/bearing_tx_array="$src/share/arrays/ap-linear-4.yaml" \
+      wifi-localize/bearing_tx_arrays="$src/share/arrays/ap-linear-4.yaml" \
       MetricMap_wifiBearingMap_00_creationOpts/transmitters_file="$(pwd)/truth$seed/transmitters.yaml" \
       MetricMap_wifiBearingMap_00_likelihoodOpts/use_aoa=true \
       MetricMap_wifiBearingMap_00_likelihoodOpts/use_aod=false UnknownMotion/max_speed_mps=0.6
     odoArgs=(); [ $run = odometry ] && odoArgs=(--odometry-port $odoPort)
-    "$build/bin/rt-ac86u-emulator" --scenario scenarios/kidnapped-10hz-$seed.yaml --preconfigured 155/80 -q \
+    # --scenario-seed: the world wifi-sim -s $seed drew above (the truth and the calibration).
+    "$build/bin/rt-ac86u-emulator" --scenario scenarios/kidnapped-10hz.yaml --scenario-seed $seed --preconfigured 155/80 -q \
       --port $csiPort --dest 127.0.0.1 --state-dir $out.state --duration 65 "${odoArgs[@]}" > $out.emulator.log 2>&1 &
     emu=$!
     for _ in $(seq 200); do [ -S $out.state/emulator.sock ] && break; sleep 0.025; done

@@ -3,8 +3,8 @@
 # evaluator runs it (the room's recorded live .ini and scenario; wifi-localize started first and
 # rt-ac86u-emulator, once it listens, streaming in real time on loopback, so the run gets the
 # drive from its first frame), and prints its median error after convergence
-# against the true poses (pf_rooms.py's figure; the estimate put on the simulation's clock with
-# the emulator's reported sim zero).
+# against the true poses (pf_rooms.py's figure; the emulator's truth, written on the receiver's
+# clock, as the estimate).
 #
 #   scripts/live_rerun.sh BUILD_DIR ROOM_DIR live-odometry|live-no-odometry SEED OUT_DIR
 #
@@ -48,18 +48,15 @@ if [[ $status -ne 0 ]]; then
     exit 1
 fi
 cp "$state/summary.json" "$out/"
+# The emulator's ground truth, on the receiver's clock (as estimate_tum.txt): no shift needed.
+cp "$state/truth/trajectory_tum.txt" "$out/truth_tum.txt"
 python3 - "$room" "$out" "$(dirname "$0")" <<'EOF'
-import os, re, sys
+import os, sys
 room, out, scripts = sys.argv[1:]
 sys.path.insert(0, scripts)
 import pf_rooms
-m = re.search(r'"unix_time_at_sim_zero":\s*([0-9.]+)', open(os.path.join(out, "summary.json")).read())
-if not m:
-    sys.exit(f"live_rerun.sh: {out}/summary.json: no unix_time_at_sim_zero")
-truth = pf_rooms.read_tum(os.path.join(room, "kidnapped", "truth", "trajectory_tum.txt"))
-times, xy = pf_rooms.read_tum(os.path.join(out, "estimate_tum.txt"))
-times = [truth[0][0] + (t - float(m.group(1))) for t in times]
-median = pf_rooms.median_after_convergence((times, xy), truth)
+truth = pf_rooms.read_tum(os.path.join(out, "truth_tum.txt"))
+median = pf_rooms.median_after_convergence(pf_rooms.read_tum(os.path.join(out, "estimate_tum.txt")), truth)
 print(f"{os.path.basename(room)} {os.path.basename(out)}: median error after convergence "
       + ("never converged" if median == float("inf") else f"{median:.2f} m"))
 EOF

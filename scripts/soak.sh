@@ -28,7 +28,7 @@ grabber=$(pgrep -n -f "rawlog-grabber -p $lib") || { echo "rawlog-grabber did no
 
 # kidnapped: 4 APs x 100 frames/s x 16 datagrams = 6,400/s at speed 1; 0.3125 -> 2,000/s.
 "$bin/rt-ac86u-emulator" --scenario share/scenarios/kidnapped.yaml --port "$port" --dest 127.0.0.1 \
-  --state-dir "$out/emulator" --speed 0.3125 --loss 0.01 --reorder 0.01 --seed 1 \
+  --state-dir "$out/emulator" --speed 0.3125 --loss 0.01 --reorder 0.01 --fault-seed 1 \
   --preconfigured 155/80 --duration "$DURATION" --status-period 60 >"$out/emulator.log" 2>&1 &
 emu=$!
 

@@ -29,6 +29,7 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt/system/os.h>
+#include <mrpt/system/string_utils.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
@@ -36,6 +37,8 @@
 #include <mrpt_wifi/localization/TransmitterMap.h>
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 #include <mrpt_wifi/obs/bearing/BearingProcessor.h>
 #include <mrpt_wifi/sensor/CWiFiCSISensor.h>
@@ -84,6 +87,15 @@ struct SensorRunner
     std::string error;  // set by the thread when doProcess() throws
     /** A CSI sensor's own bearing chain (`bearing_algorithm` set), or nullptr. */
     mrpt_wifi::LiveBearingWorker* bearingWorker = nullptr;
+    /** Set when the runner goes before the program asked the threads to stop (an error
+     *  unwinding): a joinable std::thread destroyed would terminate the program. */
+    std::atomic<bool> leaving{false};
+
+    ~SensorRunner()
+    {
+        leaving = true;
+        if (thread.joinable()) thread.join();
+    }
 
     void start(const std::atomic<bool>& stop)
     {
@@ -95,7 +107,7 @@ struct SensorRunner
                 auto next = Clock::now();
                 try
                 {
-                    while (!stop)
+                    while (!stop && !leaving)
                     {
                         sensor->doProcess();
                         next += std::chrono::duration_cast<Clock::duration>(period);
@@ -119,15 +131,16 @@ std::unique_ptr<bearing::BearingProcessor> makeFallbackProcessor(
     const std::string s = "wifi-localize";
     const std::string algo = ini.read_string(s, "bearing_algorithm", "");
     if (algo.empty()) return nullptr;
-    const auto path = [&](const std::string& key) -> std::string
+    // From the .ini's folder; arrays also by name from the data folder (ConfigPaths.h).
+    const auto resolveAs = [&](const std::string& p, const std::string& key, const char* kind)
     {
-        std::string p = ini.read_string(s, key, "");
-        if (!p.empty() && p[0] != '/' && !mrpt::system::fileExists(p) &&
-            !mrpt::system::directoryExists(p))
-            p = iniDir + "/" + p;
-        return p;
+        const auto r = config::resolveConfigPath(p, iniDir, kind, "[" + s + "] " + key);
+        if (!r.note.empty()) std::cerr << "wifi-localize: note: " << r.note << "\n";
+        return r.path;
     };
-    const std::string array = path("bearing_array");
+    const auto path = [&](const std::string& key, const char* kind)
+    { return resolveAs(ini.read_string(s, key, ""), key, kind); };
+    const std::string array = path("bearing_array", "arrays");
     if (array.empty())
         throw std::invalid_argument(
             "[wifi-localize] bearing_algorithm is set: bearing_array (the receive array YAML) is "
@@ -140,14 +153,28 @@ std::unique_ptr<bearing::BearingProcessor> makeFallbackProcessor(
             "come from csi-bearings or wifi-sar (their rawlog then goes to wifi-pf-localization)");
     est->options().keepProfile = keepProfile;
     CalibrationStore calib;
-    if (const auto c = path("bearing_calibration"); !c.empty()) calib = CalibrationStore::open(c);
+    if (const auto c = path("bearing_calibration", ""); !c.empty())
+        calib = CalibrationStore::open(c);
     bearing::BearingProcessor::Options wo;
     wo.stride = unsigned(std::max(1, ini.read_int(s, "bearing_stride", 1)));
     auto p = std::make_unique<bearing::BearingProcessor>(
         CsiPreprocessor(PreprocessOptions(), AntennaArray::fromYamlFile(array), calib),
         std::move(est), wo);
-    if (const auto tx = path("bearing_tx_array"); !tx.empty())
-        p->setDefaultTransmitterArray(AntennaArray::fromYamlFile(tx));
+    // As the sensor's key of the same name: FILE (every transmitter) and/or MAC=FILE,
+    // comma-separated; read under its former name bearing_tx_array too.
+    std::vector<std::string> txArrays;
+    mrpt::system::tokenize(
+        config::readString(ini, s, config::sectionKeys(s), "bearing_tx_arrays", ""), ", \t",
+        txArrays);
+    for (const auto& t : txArrays)
+        if (const auto eq = t.find('='); eq == std::string::npos)
+            p->setDefaultTransmitterArray(
+                AntennaArray::fromYamlFile(resolveAs(t, "bearing_tx_arrays", "arrays")));
+        else
+            p->setTransmitterArray(
+                MacAddress::fromString(t.substr(0, eq)),
+                AntennaArray::fromYamlFile(
+                    resolveAs(t.substr(eq + 1), "bearing_tx_arrays", "arrays")));
     return p;
 }
 
@@ -542,16 +569,28 @@ int main(int argc, char** argv)
         {
             TCLAP::CmdLine cmd(
                 "Live WiFi localization: runs the sensors of a rawlog-grabber-style .ini "
-                "in-process (CWiFiCSISensor via -p libmrpt_wifi_sensor.so, odometry sensors) and "
+                "in-process (CWiFiCSISensor via -p <build or prefix>/lib/libmrpt_wifi_sensor.so, "
+                "odometry sensors) and "
                 "MRPT's particle filter with the WiFi bearing map on their observations as they "
                 "arrive. The same .ini holds the pf-localization sections and [wifi-localize] "
-                "(see share/localization/wifi-localize-emulator.ini).",
+                "(see share/localization/wifi-localize-rt-ac86u.ini for a real router, "
+                "share/localization/wifi-localize-emulator.ini for rt-ac86u-emulator). Exit "
+                "status: 0 the run "
+                "ended (duration, Ctrl+C/SIGTERM, idle, window closed) with usable bearings; 1 "
+                "bad command line or .ini, or a sensor failed; when no usable CSI arrived for "
+                "no_csi_timeout_s (or in the whole run), the cause: 4 router control failed "
+                "(ssh), 5 no datagrams on the UDP port, 6 datagrams but no CSI frame passed "
+                "(router_address, MAC/RSSI filters, format), 7 CSI frames but no bearings "
+                "(bearing chain, calibration, array), 8 bearings but none from a transmitter of "
+                "the AP map (channel, map). See docs/troubleshooting.md.",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIni(
                 "config", "sensors + localization .ini", true, "", "CONFIG.ini", cmd);
             TCLAP::MultiArg<std::string> argPlugin(
-                "p", "plugin", "Plugin module(s) to load first, as rawlog-grabber -p", false,
-                "LIB.so", cmd);
+                "p", "plugin",
+                "Plugin module(s) to load first, as rawlog-grabber -p: "
+                "<build or prefix>/lib/libmrpt_wifi_sensor.so for CWiFiCSISensor",
+                false, "LIB.so", cmd);
             TCLAP::ValueArg<std::string> argOut(
                 "o", "out-dir", "Output folder (estimate_tum.txt, estimate_cov.csv, summary.txt)",
                 false, "wifi-localize-out", "DIR", cmd);
@@ -589,6 +628,12 @@ int main(int argc, char** argv)
                 "", "screenshot", "With --view: save the window to this PNG at the end", false, "",
                 "FILE.png", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No status lines", cmd);
+            TCLAP::SwitchArg argKeepWaiting(
+                "", "keep-waiting",
+                "When no usable CSI arrives for [wifi-localize] no_csi_timeout_s (default 20 s; 0 "
+                "waits forever), warn with the cause and keep waiting instead of exiting with "
+                "the cause's status",
+                cmd);
             if (const int rc = cli::parseCommandLine(cmd, argc, const_cast<const char**>(argv));
                 rc >= 0)
                 return rc;
@@ -604,7 +649,11 @@ int main(int argc, char** argv)
             if (!mrpt::system::fileExists(iniPath))
                 throw std::runtime_error("cannot read '" + iniPath + "'");
             mrpt::config::CConfigFile ini(iniPath);
-            const std::string iniDir = mrpt::system::extractFileDirectory(iniPath);
+            // A misspelt section name would leave its keys unread without a word.
+            for (const auto& w : config::unreadSections(ini, config::pfLocalizationMrptSections()))
+                std::cerr << "wifi-localize: warning: " << iniPath << ": " << w << "\n";
+            // Relative paths in the .ini: from its own folder (ConfigPaths.h).
+            const std::string iniDir = config::iniDirectoryOf(iniPath);
             // Before the filter draws its first particles (MRPT seeds from the clock).
             mrpt::random::getRandomGenerator().randomize(argSeed.getValue());
             LiveLocalizer loc(ini, iniDir);
@@ -612,7 +661,16 @@ int main(int argc, char** argv)
                 std::cerr
                     << "note: the map sets no area (min_x ... max_y in its creationOpts): the "
                        "robot is kept inside the init_PDF box\n";
+            if (!loc.areaWarning().empty())
+                std::cerr << "wifi-localize: warning: " << iniPath << ": " << loc.areaWarning()
+                          << "\n";
             auto fallback = makeFallbackProcessor(ini, iniDir, false);
+            const double noCsiTimeout_s = ini.read_double("wifi-localize", "no_csi_timeout_s", 20);
+            if (!(noCsiTimeout_s >= 0))
+                throw std::invalid_argument(
+                    iniPath + ": [wifi-localize] no_csi_timeout_s = " +
+                    ini.read_string("wifi-localize", "no_csi_timeout_s", "") +
+                    ": seconds without usable CSI before giving up, >= 0 (0: wait forever)");
             LiveDeviceMapper mapper(ini, "wifi-localize");
             TransmitterMap devTruth;
             if (argDevTruth.isSet())
@@ -653,6 +711,9 @@ int main(int argc, char** argv)
             if (argRawlog.isSet()) rawlog = std::make_unique<RawlogWriter>(argRawlog.getValue());
 
             // ---- sensors: every section with a `driver`, as rawlog-grabber does
+            // Declared before the sensors: their threads read it until they are joined, also
+            // when an error unwinds this scope.
+            std::atomic<bool> stopSensors{false};
             std::vector<std::unique_ptr<SensorRunner>> sensors;
             std::vector<std::string> sections;
             ini.getAllSections(sections);
@@ -666,7 +727,8 @@ int main(int argc, char** argv)
                 if (!r->sensor)
                     throw std::runtime_error(
                         "[" + sec + "] driver = " + driver +
-                        ": no such sensor class (forgot -p libmrpt_wifi_sensor.so?)");
+                        ": no such sensor class (forgot -p <build or "
+                        "prefix>/lib/libmrpt_wifi_sensor.so?)");
                 r->sensor->loadConfig(ini, sec);
                 sensors.push_back(std::move(r));
             }
@@ -683,7 +745,6 @@ int main(int argc, char** argv)
 
             std::signal(SIGINT, onSignal);
             std::signal(SIGTERM, onSignal);
-            std::atomic<bool> stopSensors{false};
             for (auto& s : sensors) s->start(stopSensors);
 
             std::unique_ptr<LiveView> view;
@@ -755,8 +816,173 @@ int main(int argc, char** argv)
             };
             std::string stopReason = "Ctrl+C";
             std::string lastStatusText = "(no data yet)";
+
+            // ---- no usable CSI: after no_csi_timeout_s without a bearing from a transmitter
+            // of the map, say why (the first stage of the chain that got nothing) and exit
+            // with that cause's status, unless --keep-waiting.
+            uint64_t nMapped = 0;  // bearings from a transmitter of the map
+            std::set<std::string> unmappedHeard, channelsSeen;
+            std::map<std::string, uint64_t> fallbackRejects;  // why our chain gave no bearing
+            const auto noteMapped = [&](const CObservationWiFiBearing& b)
+            {
+                if (loc.wifiMap().transmitters().find(b.transmitter))
+                    ++nMapped;
+                else if (unmappedHeard.size() < 6)
+                    unmappedHeard.insert(b.transmitter.asString());
+            };
+            struct Window
+            {
+                Clock::time_point start;
+                uint64_t csi = 0, bearings = 0, mapped = 0;
+                std::vector<CWiFiCSISensor::Counters> counters;  // per sensor (CSI ones)
+            };
+            const auto csiSensorOf = [](const SensorRunner& r)
+            { return dynamic_cast<CWiFiCSISensor*>(r.sensor.get()); };
+            const auto openWindow = [&]
+            {
+                Window w;
+                w.start = Clock::now();
+                w.csi = nCsi, w.bearings = nBearings, w.mapped = nMapped;
+                for (const auto& r : sensors)
+                    w.counters.push_back(
+                        csiSensorOf(*r) ? csiSensorOf(*r)->counters() : CWiFiCSISensor::Counters());
+                return w;
+            };
+            // {exit status, cause and what to check}; status 0: nothing to report (usable
+            // bearings came, or every source is a replay that ended).
+            const auto diagnose = [&](const Window& w) -> std::pair<int, std::string>
+            {
+                const double secs = std::chrono::duration<double>(Clock::now() - w.start).count();
+                const std::string during = "in " + fmt(secs, 0) + " s";
+                if (nMapped > w.mapped) return {0, ""};
+                int status = 0;
+                std::string text;
+                bool csiSensors = false, framesCame = false, replaysEnded = true;
+                for (size_t i = 0; i < sensors.size(); ++i)
+                {
+                    const auto* c = csiSensorOf(*sensors[i]);
+                    if (!c) continue;
+                    csiSensors = true;
+                    const auto d = c->diagnoseNoFrames(w.counters[i], secs);
+                    using Cause = CWiFiCSISensor::NoFrameDiagnosis::Cause;
+                    if (d.cause != Cause::ReplayEnded) replaysEnded = false;
+                    if (d.cause == Cause::None)
+                    {
+                        framesCame = true;
+                        continue;
+                    }
+                    const int st = d.cause == Cause::ControlFailed ? cli::kExitRouterControlFailed
+                                   : d.cause == Cause::NoMatchingFrames ? cli::kExitNoMatchingFrames
+                                   : d.cause == Cause::NoDatagrams      ? cli::kExitNoDatagrams
+                                                                        : 0;
+                    // The most specific cause names the status: control failure, then
+                    // datagrams that matched nothing, then silence.
+                    const auto rank = [](int x)
+                    {
+                        return x == cli::kExitRouterControlFailed ? 3
+                               : x == cli::kExitNoMatchingFrames  ? 2
+                               : x == cli::kExitNoDatagrams       ? 1
+                                                                  : 0;
+                    };
+                    if (rank(st) > rank(status)) status = st;
+                    if (st) text += (text.empty() ? "" : "; ") + d.text;
+                }
+                if (nCsi == w.csi && nBearings == w.bearings)
+                {
+                    if (csiSensors && replaysEnded) return {0, ""};
+                    if (csiSensors && !framesCame && status) return {status, text};
+                    return {
+                        cli::kExitNoDatagrams,
+                        "no CSI observation from the sensors " + during + " (" +
+                            (csiSensors ? "frames were delivered but none reached the filter"
+                                        : "no CWiFiCSISensor section: which sensor makes "
+                                          "the CSI?") +
+                            ")"};
+                }
+                std::string channels;
+                for (const auto& c : channelsSeen) channels += (channels.empty() ? "" : ", ") + c;
+                if (nBearings == w.bearings)
+                {
+                    std::string why;
+                    bool sensorChains = false;
+                    for (const auto& r : sensors)
+                        if (r->bearingWorker)
+                        {
+                            sensorChains = true;
+                            const auto st = r->bearingWorker->stats();
+                            why +=
+                                " [" + r->section + "]'s chain: " + std::to_string(st.estimated) +
+                                " estimated, " + std::to_string(st.rejected) + " rejected, " +
+                                std::to_string(st.calibrationErrors) + " calibration mismatches;";
+                        }
+                    if (!fallback && !sensorChains)
+                        return {
+                            cli::kExitNoBearings,
+                            std::to_string(nCsi - w.csi) + " CSI frames " + during +
+                                " but nothing turns them into bearings: set "
+                                "bearing_algorithm and bearing_array (and "
+                                "bearing_calibration) in [wifi-localize] or in the CSI "
+                                "sensor's section"};
+                    for (const auto& [reason, n] : fallbackRejects)
+                        why += " " + reason + " " + std::to_string(n) + ";";
+                    return {
+                        cli::kExitNoBearings,
+                        std::to_string(nCsi - w.csi) + " CSI frames " + during + " (channels " +
+                            channels + ") but no bearing from them:" + why +
+                            " check that bearing_calibration was made on this channel and "
+                            "bandwidth and that bearing_array has this receiver's antennas "
+                            "in its port order (array mismatch: more receive chains than "
+                            "array elements)"};
+                }
+                std::string heard;
+                for (const auto& m : unmappedHeard) heard += (heard.empty() ? "" : ", ") + m;
+                return {
+                    cli::kExitNoMappedBearings,
+                    std::to_string(nBearings - w.bearings) + " bearings " + during +
+                        ", none from a transmitter of the AP map (heard " + heard + " on " +
+                        channels +
+                        "): wrong channel (the map's access points transmit on another one: "
+                        "the sensor's channel / chanspec) or the map lacks them (its "
+                        "transmitters_file, MAC addresses as csi-router scan lists them)"};
+            };
+            const Window wholeRun = openWindow();
+            Window window = wholeRun;
+            auto lastWindowMove = Clock::now();
+            int exitStatus = 0;
+            std::string noCsiCause;  // the last diagnosis printed
             while (!g_stop)
             {
+                if (nMapped > window.mapped &&
+                    Clock::now() - lastWindowMove > std::chrono::milliseconds(100))
+                {
+                    window = openWindow();
+                    lastWindowMove = Clock::now();
+                }
+                if (noCsiTimeout_s > 0 &&
+                    Clock::now() - window.start >= std::chrono::duration<double>(noCsiTimeout_s))
+                {
+                    const auto [status, text] = diagnose(window);
+                    window = openWindow();
+                    if (status != 0)
+                    {
+                        noCsiCause = text;
+                        if (argKeepWaiting.getValue())
+                            std::cerr << "wifi-localize: warning: no usable CSI for "
+                                      << fmt(noCsiTimeout_s, 0) << " s: " << text
+                                      << " (--keep-waiting: still waiting)\n";
+                        else
+                        {
+                            std::cerr << "wifi-localize: error: no usable CSI for "
+                                      << fmt(noCsiTimeout_s, 0) << " s: " << text
+                                      << " (exit status " << status
+                                      << "; --keep-waiting or [wifi-localize] "
+                                         "no_csi_timeout_s = 0 waits instead)\n";
+                            exitStatus = status;
+                            stopReason = "no usable CSI for " + fmt(noCsiTimeout_s, 0) + " s";
+                            break;
+                        }
+                    }
+                }
                 if (argDuration.getValue() > 0 && elapsed() >= argDuration.getValue())
                 {
                     stopReason = "duration reached";
@@ -823,6 +1049,7 @@ int main(int argc, char** argv)
                         if (l.size() > 4 && l.compare(l.size() - 4, 4, "_AOA") == 0)
                             sensorBearingLabels.insert(l.substr(0, l.size() - 4));
                         ++nBearings, ++secBearings;
+                        noteMapped(*b);
                         loc.addBearing(b);
                         if (mapper.enabled()) mapper.addBearing(*b);
                         recent.push_back(b);
@@ -830,14 +1057,16 @@ int main(int argc, char** argv)
                     else if (auto csi = std::dynamic_pointer_cast<CObservationWiFiCSI>(obs))
                     {
                         ++nCsi;
+                        if (channelsSeen.size() < 4) channelsSeen.insert(csi->chanspec.asString());
                         // The view shows a bearing-delay profile twice a second: only then
                         // does the estimator keep one (it costs more than the bearing).
                         bool keep = false;
                         if (fallback && view)
                             fallback->estimator().options().keepProfile = keep =
                                 Clock::now() - lastProfileWanted > std::chrono::milliseconds(500);
+                        RejectReason rejectReason = RejectReason::Accepted;
                         if (fallback && !sensorBearingLabels.count(csi->sensorLabel))
-                            if (auto fb = fallback->process(*csi))
+                            if (auto fb = fallback->process(*csi, &rejectReason))
                             {
                                 if (keep && fallback->estimator().lastProfile())
                                 {
@@ -845,6 +1074,7 @@ int main(int argc, char** argv)
                                     lastProfileWanted = Clock::now();
                                 }
                                 ++nFallback, ++nBearings, ++secBearings;
+                                noteMapped(*fb);
                                 loc.addBearing(fb);
                                 if (mapper.enabled())
                                 {
@@ -854,6 +1084,8 @@ int main(int argc, char** argv)
                                 }
                                 recent.push_back(fb);
                             }
+                            else if (rejectReason != RejectReason::Accepted)
+                                ++fallbackRejects[toString(rejectReason)];
                     }
                     else
                         ++nOther;
@@ -1080,8 +1312,24 @@ int main(int argc, char** argv)
                 sum << "  WARNING        : " << w << "\n";
                 std::cerr << "wifi-localize: warning: " << w << "\n";
             }
+            // A run that never had a usable bearing failed, however it ended: its status names
+            // the cause (as after no_csi_timeout_s).
+            if (nMapped == 0 && exitStatus == 0)
+                if (const auto [status, text] = diagnose(wholeRun); status != 0)
+                {
+                    exitStatus = status;
+                    noCsiCause = text;
+                    std::cerr << "wifi-localize: error: no usable CSI in the whole run: " << text
+                              << " (exit status " << status << ")\n";
+                }
+            if (nCsi == 0)
+                sum << "  WARNING        : 0 CSI frames received"
+                    << (noCsiCause.empty() ? std::string() : ": " + noCsiCause) << "\n";
+            else if (exitStatus != 0)
+                sum << "  WARNING        : no usable CSI: " << noCsiCause << "\n";
+            if (exitStatus != 0) sum << "  exit status    : " << exitStatus << "\n";
             std::cout << sum.str();
             std::ofstream(outDir + "/summary.txt") << sum.str();
-            return 0;
+            return exitStatus;
         });
 }

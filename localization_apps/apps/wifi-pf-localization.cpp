@@ -11,6 +11,7 @@
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/core/bits_math.h>
 #include <mrpt/io/vector_loadsave.h>
+#include <mrpt/obs/CActionRobotMovement3D.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/random/RandomGenerators.h>
 #include <mrpt/system/CTicTac.h>
@@ -27,9 +28,12 @@
 #include <mrpt_wifi/localization/UnknownMotion.h>
 #include <mrpt_wifi/localization/WindowSmoother.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <fstream>
 #include <iostream>
 #include <optional>
@@ -39,6 +43,13 @@ using namespace mrpt_wifi::localization;
 
 namespace
 {
+std::string fmt(double v, int prec = 3)
+{
+    char b[64];
+    std::snprintf(b, sizeof(b), "%.*f", prec, v);
+    return b;
+}
+
 /** MRPT's app with a progress line: counts what the data source hands to the filter. */
 class ProgressMcl : public mrpt::apps::MonteCarloLocalization_Rawlog
 {
@@ -85,10 +96,55 @@ public:
             });
     }
 
+    /** MRPT's app filters in a worker thread, where an exception aborts the whole program: a
+     *  failure while preparing a step ends that run (as the end of the input would) and is
+     *  thrown here, in the caller's thread, after run(). */
+    void rethrowStepFailure() const
+    {
+        if (stepFailure_) std::rethrow_exception(stepFailure_);
+    }
+
 protected:
     bool impl_get_next_observations(
         mrpt::obs::CActionCollection::Ptr& action, mrpt::obs::CSensoryFrame::Ptr& observations,
         mrpt::obs::CObservation::Ptr& observation) override
+    {
+        if (stepFailure_) return false;  // another run of the same app failed
+        try
+        {
+            const bool ok = nextStep(action, observations, observation);
+            // The filter would throw in its thread on a step without a motion it can use.
+            if (ok && action && !action->getBestMovementEstimation() &&
+                !action->getActionByClass<mrpt::obs::CActionRobotMovement3D>())
+                throw std::logic_error(
+                    "filter step at t = " + stepTime(observations, observation) +
+                    " has no robot motion MRPT's particle filter accepts (" +
+                    std::to_string(action->size()) + " actions)");
+            return ok;
+        }
+        catch (...)
+        {
+            stepFailure_ = std::current_exception();
+            return false;
+        }
+    }
+
+private:
+    static std::string stepTime(
+        const mrpt::obs::CSensoryFrame::Ptr& observations,
+        const mrpt::obs::CObservation::Ptr& observation)
+    {
+        mrpt::Clock::time_point t = INVALID_TIMESTAMP;
+        if (observation)
+            t = observation->timestamp;
+        else if (observations && !observations->empty())
+            t = (*observations->begin())->timestamp;
+        return t == INVALID_TIMESTAMP ? std::string("?") : fmt(mrpt::Clock::toDouble(t), 3);
+    }
+
+    bool nextStep(
+        mrpt::obs::CActionCollection::Ptr& action, mrpt::obs::CSensoryFrame::Ptr& observations,
+        mrpt::obs::CObservation::Ptr& observation)
     {
         bool ok = DataSourceRawlog::impl_get_next_observations(action, observations, observation);
         if (recovery_ || odoMotion_) ok = pairWithOdometry(ok, action, observations, observation);
@@ -115,7 +171,6 @@ protected:
         return ok;
     }
 
-private:
     // Observation-only rawlog with odometry: the readings are consumed here and the next
     // bearing comes as an action/sensory-frame pair, the action the odometry increment through
     // the same Gaussian model MRPT's app uses ([DummyOdometryParams]).
@@ -200,6 +255,7 @@ private:
     }
 
     cli::Progress progress_;
+    std::exception_ptr stepFailure_;
     bool seeded_ = false, warnedUnseeded_ = false;
     double t0_ = 0, t1_ = 0;
     UnknownMotion motion_;
@@ -213,12 +269,6 @@ private:
     mrpt::Clock::time_point lastStamp_ = INVALID_TIMESTAMP;
 };
 
-std::string fmt(double v, int prec = 3)
-{
-    char b[64];
-    std::snprintf(b, sizeof(b), "%.*f", prec, v);
-    return b;
-}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -303,14 +353,22 @@ int main(int argc, char** argv)
             // to the .ini (pf-localization itself only looks in the working directory).
             mrpt::config::CConfigFileMemory ini;
             ini.setContent(mrpt::io::file_get_contents(argIni.getValue()));
+            // A misspelt section name would leave its keys unread without a word.
+            for (const auto& w : config::unreadSections(ini, config::pfLocalizationMrptSections()))
+                std::cerr << "wifi-pf-localization: warning: " << argIni.getValue() << ": " << w
+                          << "\n";
             const std::string mapSect = "MetricMap_wifiBearingMap_00_creationOpts";
             std::string txFile = ini.read_string(mapSect, "transmitters_file", "");
-            if (argMap.isSet()) txFile = argMap.getValue();
-            if (!txFile.empty() && txFile[0] != '/' && !mrpt::system::fileExists(txFile))
+            if (argMap.isSet())
+                txFile = argMap.getValue();  // a command-line path: from the working directory
+            else if (!txFile.empty())
             {
-                const std::string alt =
-                    mrpt::system::extractFileDirectory(argIni.getValue()) + "/" + txFile;
-                if (mrpt::system::fileExists(alt)) txFile = alt;
+                // From the .ini's folder, else the working directory, else the data folder.
+                const auto r = config::resolveConfigPath(
+                    txFile, config::iniDirectoryOf(argIni.getValue()), "localization",
+                    argIni.getValue() + ": [" + mapSect + "] transmitters_file");
+                if (!r.note.empty()) std::cerr << "note: " << r.note << "\n";
+                txFile = r.path;
             }
             if (!txFile.empty()) ini.write(mapSect, "transmitters_file", txFile);
             CWiFiBearingMap::Ptr wifiMap;
@@ -325,8 +383,13 @@ int main(int argc, char** argv)
             }
             const auto& txs = wifiMap->transmitters();
             // The robot can't leave the building: without an area of its own the map is bounded
-            // by the init_PDF box (where the kidnapped robot may be).
-            const bool areaFromInitPdf = boundByInitialPdf(*wifiMap, ini);
+            // by the init_PDF box (where the kidnapped robot may be); both given and disagreeing
+            // is most likely a half-edited .ini, said before anything runs.
+            std::string areaWarning;
+            const bool areaFromInitPdf = boundByInitialPdf(*wifiMap, ini, &areaWarning);
+            if (!areaWarning.empty())
+                std::cerr << "wifi-pf-localization: warning: " << argIni.getValue() << ": "
+                          << areaWarning << "\n";
 
             // ---- The input.
             std::string rawlog = argRawlog.getValue();
@@ -474,7 +537,8 @@ int main(int argc, char** argv)
                 app.params.write(
                     "MetricMap_wifiBearingMap_00_likelihoodOpts", "bearing_weight",
                     wifiMap->likelihoodOptions.bearingWeight * motionWeight);
-            if (areaFromInitPdf)
+            // The filter's own map gets the same area (from the init_PDF box, or widened to it).
+            if (wifiMap->area())
             {
                 const auto& a = *wifiMap->area();
                 app.params.write(mapSect, "min_x", a.min.x);
@@ -487,6 +551,7 @@ int main(int argc, char** argv)
             mrpt::system::CTicTac timer;
             app.run();
             const double runTime = timer.Tac();
+            app.rethrowStepFailure();
             app.finish();
 
             Trajectory2D est;
@@ -548,7 +613,10 @@ int main(int argc, char** argv)
                 << "  map warnings   : " << wifiMap->unknownTransmitterCount() << "\n";
             if (const auto area = areaSummary(*wifiMap, est.poses); !area.empty())
                 sum << "  area           : " << area
-                    << (areaFromInitPdf ? " (the init_PDF box)" : " (the map's)") << "\n";
+                    << (areaFromInitPdf        ? " (the init_PDF box)"
+                        : !areaWarning.empty() ? " (the map's; see the warning above)"
+                                               : " (the map's)")
+                    << "\n";
             sum << "  window smoother: " << smootherOptions.asString();
             if (smootherOptions.enabled)
                 sum << ": " << refined << " of " << est.size() << " estimates refined, "

@@ -429,6 +429,8 @@ int main(int argc, char** argv)
             }
             std::cout << "wifi-sar: " << peers.size() - size_t(failed) << " of " << peers.size()
                       << " peers with a bearing\n";
-            return failed ? 1 : 0;
+            // As wifi-calibrate: 2 = it ran, but part of the result could not be determined
+            // (1 stays an error: bad input, nothing done).
+            return failed ? 2 : 0;
         });
 }

@@ -3,6 +3,7 @@
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt_wifi/localization/BearingTrack.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
+#include <mrpt_wifi/localization/IniValues.h>
 
 #include <algorithm>
 #include <array>
@@ -19,6 +20,10 @@ using mrpt::math::wrapToPi;
 void TrackMotionPrior::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
+    requireIniNumbers(
+        c, s,
+        {"track_node_period_s", "track_accel_std", "track_turn_accel_std_deg",
+         "track_lateral_std_m"});
     nodePeriod_s = c.read_double(s, "track_node_period_s", nodePeriod_s);
     accelStd_mps2 = c.read_double(s, "track_accel_std", accelStd_mps2);
     turnAccelStd_radps2 = mrpt::DEG2RAD(

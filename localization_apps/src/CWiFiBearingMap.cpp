@@ -8,8 +8,12 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/localization/BearingRecord.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/IniValues.h>
+#include <mrpt_wifi/localization/LiveLocalizer.h>  // initialPdfArea
 #include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 
 #include <fstream>
 #include <iostream>
@@ -30,14 +34,49 @@ void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& prefix)
 {
     const std::string sect = prefix + "_creationOpts";
+    keyError.clear();
+    try
+    {
+        config::requireKnownKeys(
+            source, sect, config::sectionKeys("MetricMap_wifiBearingMap_NN_creationOpts"));
+    }
+    catch (const std::invalid_argument& e)
+    {
+        keyError = e.what();  // reported when the map is created, as the area's errors
+    }
     transmittersFile = source.read_string(sect, "transmitters_file", "");
+    // Relative: from the .ini's folder (found also when Debian's pf-localization reads it),
+    // else the working directory, else the data folder (mrpt_wifi/obs/ConfigPaths.h).
+    try
+    {
+        const auto r = config::resolveConfigPath(
+            transmittersFile, config::iniDirectory(source, sect), "localization",
+            "[" + sect + "] transmitters_file");
+        if (!r.note.empty()) std::cerr << "note: " << r.note << "\n";
+        transmittersFile = r.path;
+    }
+    catch (const std::invalid_argument&)
+    {
+        // kept as written: creating the map names the file it cannot read
+    }
     const char* keys[] = {"min_x", "max_x", "min_y", "max_y"};
     size_t given = 0;
     for (const char* k : keys) given += source.keyExists(sect, k) ? 1 : 0;
     area.reset();
+    areaFromInitialPdf = false;
     areaError.clear();
     // Errors wait for the map's creation: MRPT's loader leaks a definition that throws here.
-    if (given == 4)
+    try
+    {
+        requireIniNumbers(source, sect, {"min_x", "max_x", "min_y", "max_y"});
+    }
+    catch (const std::invalid_argument& e)
+    {
+        areaError = e.what();
+    }
+    if (!areaError.empty())
+        ;  // reported when the map is created
+    else if (given == 4)
     {
         const auto rd = [&](const char* k) { return source.read_double(sect, k, 0); };
         area = mrpt::math::TBoundingBox(
@@ -50,7 +89,29 @@ void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
         areaError = "[" + sect +
                     "] min_x, max_x, min_y, max_y: give all four (the area the robot can be in) "
                     "or none";
-    likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+    else
+    {
+        // One source of truth: the area is where a kidnapped robot may start, in every program
+        // that builds the map from this file (Debian's pf-localization too).
+        try
+        {
+            area = localization::initialPdfArea(source);
+            areaFromInitialPdf = area.has_value();
+        }
+        catch (const std::invalid_argument& e)
+        {
+            areaError = e.what();
+        }
+    }
+    likelihoodError.clear();
+    try
+    {
+        likelihoodOpts.loadFromConfigFile(source, prefix + "_likelihoodOpts");
+    }
+    catch (const std::exception& e)
+    {
+        likelihoodError = e.what();  // reported when the map is created, as the area's errors
+    }
 }
 
 void CWiFiBearingMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const
@@ -69,10 +130,21 @@ mrpt::maps::CMetricMap* CWiFiBearingMap::internal_CreateFromMapDefinition(
     auto* map = new CWiFiBearingMap();
     map->likelihoodOptions = def.likelihoodOpts;
     map->area_ = def.area;
+    map->areaFromInitPdf_ = def.areaFromInitialPdf;
+    if (!def.keyError.empty())
+    {
+        delete map;
+        throw std::invalid_argument(def.keyError);
+    }
     if (!def.areaError.empty())
     {
         delete map;
         throw std::invalid_argument(def.areaError);
+    }
+    if (!def.likelihoodError.empty())
+    {
+        delete map;
+        throw std::invalid_argument(def.likelihoodError);
     }
     if (def.transmittersFile.empty())
     {
@@ -95,6 +167,13 @@ mrpt::maps::CMetricMap* CWiFiBearingMap::internal_CreateFromMapDefinition(
 void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
+    config::requireKnownKeys(
+        c, s, config::sectionKeys("MetricMap_wifiBearingMap_NN_likelihoodOpts"));
+    requireIniBools(c, s, {"use_aoa", "use_aod"});
+    requireIniNumbers(
+        c, s,
+        {"outlier_prob", "min_std_deg", "max_std_deg", "std_scale", "aoa_alternative_share",
+         "bearing_weight"});
     use.aoa = c.read_bool(s, "use_aoa", use.aoa);
     use.aod = c.read_bool(s, "use_aod", use.aod);
     model.outlierProb = c.read_double(s, "outlier_prob", model.outlierProb);

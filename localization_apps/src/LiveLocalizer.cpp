@@ -6,13 +6,17 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
+#include <mrpt_wifi/localization/IniValues.h>
 #include <mrpt_wifi/localization/LiveLocalizer.h>
 #include <mrpt_wifi/localization/RawlogIO.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace mrpt_wifi::localization
@@ -25,10 +29,13 @@ CWiFiBearingMap::Ptr wifiMapFromIni(
     for (auto& i : inits)
         if (auto* w = dynamic_cast<CWiFiBearingMap::TMapDefinition*>(i.get()))
         {
+            // From the .ini's folder, else the working directory, else the data folder.
             auto& f = w->transmittersFile;
-            if (!f.empty() && f[0] != '/' && !mrpt::system::fileExists(f) &&
-                mrpt::system::fileExists(iniDir + "/" + f))
-                f = iniDir + "/" + f;
+            const auto r = config::resolveConfigPath(
+                f, iniDir, "localization",
+                "[MetricMap_wifiBearingMap_00_creationOpts] transmitters_file");
+            if (!r.note.empty()) std::fprintf(stderr, "note: %s\n", r.note.c_str());
+            f = r.path;
         }
     mrpt::maps::CMultiMetricMap maps;
     maps.setListOfMaps(inits);
@@ -46,7 +53,12 @@ CWiFiBearingMap::Ptr wifiMapFromIni(
 std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConfigFileBase& ini)
 {
     const std::string sect = "LocalizationExperiment";
+    requireIniNumbers(ini, sect, {"init_PDF_mode"});
     if (ini.read_int(sect, "init_PDF_mode", 1) != 1) return std::nullopt;
+    requireIniNumbers(
+        ini, sect,
+        {"init_PDF_min_x", "init_PDF_max_x", "init_PDF_min_y", "init_PDF_max_y",
+         "init_PDF_min_yaw_deg", "init_PDF_max_yaw_deg"});
     for (const char* k : {"init_PDF_min_x", "init_PDF_max_x", "init_PDF_min_y", "init_PDF_max_y"})
         if (!ini.keyExists(sect, k)) return std::nullopt;
     const auto rd = [&](const char* k) { return ini.read_double(sect, k, 0); };
@@ -58,12 +70,65 @@ std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConf
     return box;
 }
 
-bool boundByInitialPdf(CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini)
+std::string boxText(const mrpt::math::TBoundingBox& b)
 {
-    if (map.area()) return false;
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "x %g..%g, y %g..%g m", b.min.x, b.max.x, b.min.y, b.max.y);
+    return buf;
+}
+
+bool boundByInitialPdf(
+    CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini, std::string* warning)
+{
+    if (warning) warning->clear();
+    if (map.areaFromInitialPdf()) return true;  // the map definition took it already
     const auto box = initialPdfArea(ini);
-    if (box) map.setArea(box);
-    return box.has_value();
+    if (!map.area())
+    {
+        if (box) map.setArea(box);
+        return box.has_value();
+    }
+    if (!box) return false;
+    // Both given: one of them is most likely a leftover of another building (a copied .ini
+    // with only one of the two edited).
+    const auto area = *map.area();
+    constexpr double tol = 1e-6;
+    const bool boxInside = box->min.x >= area.min.x - tol && box->max.x <= area.max.x + tol &&
+                           box->min.y >= area.min.y - tol && box->max.y <= area.max.y + tol;
+    const std::string areaKeys =
+        "the map's area ([MetricMap_wifiBearingMap_00_creationOpts] min_x, max_x, min_y, "
+        "max_y: ";
+    const std::string boxKeys =
+        "the init_PDF box ([LocalizationExperiment] init_PDF_min_x, init_PDF_max_x, "
+        "init_PDF_min_y, init_PDF_max_y: ";
+    const std::string howToFix =
+        "Leave min_x ... max_y out of the map's creationOpts to take the area from the "
+        "init_PDF box, or make the two agree.";
+    if (!boxInside)
+    {
+        // A robot the user says may be anywhere in the box must not die at the area's edge:
+        // the area grows to cover the box.
+        mrpt::math::TBoundingBox both = area;
+        both.min.x = std::min(area.min.x, box->min.x);
+        both.max.x = std::max(area.max.x, box->max.x);
+        both.min.y = std::min(area.min.y, box->min.y);
+        both.max.y = std::max(area.max.y, box->max.y);
+        map.setArea(both);
+        if (warning)
+            *warning = boxKeys + boxText(*box) + ") reaches outside " + areaKeys + boxText(area) +
+                       "): the area is widened to " + boxText(both) + " to cover both. " + howToFix;
+        return false;
+    }
+    const bool same =
+        std::abs(box->min.x - area.min.x) <= tol && std::abs(box->max.x - area.max.x) <= tol &&
+        std::abs(box->min.y - area.min.y) <= tol && std::abs(box->max.y - area.max.y) <= tol;
+    if (!same && warning)
+        *warning = areaKeys + boxText(area) + ") is larger than " + boxKeys + boxText(*box) +
+                   "): the filter starts inside the box only and finds a robot elsewhere in the "
+                   "area only by [ParticleRecovery] re-seeding. For a kidnapped robot give the "
+                   "box the whole area. " +
+                   howToFix;
+    return false;
 }
 
 mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(
@@ -81,13 +146,10 @@ mrpt::obs::CActionRobotMovement2D::TMotionModelOptions odometryMotionModel(
 void LiveLocalizerOptions::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-    // The live filter's own random walk is gone: both filters read [UnknownMotion].
-    for (const char* k : {"unknown_motion_speed_mps", "unknown_motion_turn_dps"})
-        if (c.keyExists(s, k))
-            throw std::invalid_argument(
-                "[" + s + "] " + k +
-                " is no longer read: without odometry wifi-localize uses the [UnknownMotion] "
-                "section as wifi-pf-localization does (max_speed_mps, max_turn_rate_dps, ...)");
+    // Also names the former keys: the live filter's own random walk is gone (both filters
+    // read [UnknownMotion]), bearing_tx_array is the sensor's bearing_tx_arrays.
+    config::requireKnownKeys(c, s, config::sectionKeys("wifi-localize"));
+    requireIniNumbers(c, s, {"max_bearings_per_step", "max_queue_s", "bearing_bias_std_deg"});
     const int maxPerStep = c.read_int(s, "max_bearings_per_step", int(maxBearingsPerStep));
     if (maxPerStep < 0)
         throw std::invalid_argument("[" + s + "] max_bearings_per_step must be >= 0");
@@ -107,7 +169,7 @@ LiveLocalizer::LiveLocalizer(const mrpt::config::CConfigFileBase& ini, const std
     // The map, as wifi-pf-localization builds it (relative transmitters_file: cwd, then iniDir),
     // bounded by the init_PDF box unless it sets its own area.
     wifiMap_ = wifiMapFromIni(ini, iniDir);
-    areaFromInitPdf_ = boundByInitialPdf(*wifiMap_, ini);
+    areaFromInitPdf_ = boundByInitialPdf(*wifiMap_, ini, &areaWarning_);
     map_->maps.push_back(wifiMap_);
     motion_.loadFromConfigFile(ini, "UnknownMotion");
     cv_ = ConstantVelocityPrediction(motion_);
@@ -299,6 +361,11 @@ double LiveLocalizer::spread_m() const
 
 LiveDeviceMapper::LiveDeviceMapper(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
+    requireIniBools(c, s, {"map_devices"});
+    requireIniNumbers(
+        c, s,
+        {"map_min_std_deg", "map_outlier_prob", "map_grid_m", "map_update_period_s",
+         "map_odometry_drift_xy", "map_odometry_drift_yaw_deg"});
     enabled_ = c.read_bool(s, "map_devices", false);
     // wifi-iot-map's command-line defaults
     opts_.model.minStd_rad = mrpt::DEG2RAD(c.read_double(s, "map_min_std_deg", 3.0));

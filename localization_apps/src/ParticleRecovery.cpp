@@ -3,7 +3,10 @@
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/localization/IniValues.h>
 #include <mrpt_wifi/localization/ParticleRecovery.h>
+#include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
 
 #include <algorithm>
 #include <cmath>
@@ -16,6 +19,8 @@ namespace mrpt_wifi::localization
 void ParticleRecoveryOptions::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
+    config::requireKnownKeys(c, s, config::sectionKeys("ParticleRecovery"));
+    requireIniNumbers(c, s, {"rate_hz", "window_s", "min_agreement", "max_std_deg"});
     rate_hz = c.read_double(s, "rate_hz", rate_hz);
     window_s = c.read_double(s, "window_s", window_s);
     minAgreement = c.read_double(s, "min_agreement", minAgreement);
@@ -123,6 +128,7 @@ mrpt::obs::CActionRobotMovement2D withReseeding(
         }
     }
     a.poseChange = pdf;
+    keepUsableByMrptFilter(a);
     return a;
 }
 

@@ -87,13 +87,16 @@ Trajectory2D Trajectory2D::fromWsrCsv(const std::string& path)
             {
                 size_t used = 0;
                 v.push_back(std::stod(field, &used));
-                if (field.find_first_not_of(" \t\r", used) != std::string::npos)
+                // stod takes "nan" and "inf": a pose must be a finite number.
+                if (field.find_first_not_of(" \t\r", used) != std::string::npos ||
+                    !std::isfinite(v.back()))
                     throw std::invalid_argument(field);
             }
             catch (const std::exception&)
             {
                 throw std::runtime_error(
-                    path + ":" + std::to_string(lineNo) + ": '" + field + "' is not a number");
+                    path + ":" + std::to_string(lineNo) + ": '" + field +
+                    "' is not a finite number");
             }
         }
         if (v.size() == 5)  // motion capture: t, (unused), x, y, z; no heading recorded

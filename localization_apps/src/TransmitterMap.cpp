@@ -4,6 +4,7 @@
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/TransmitterMap.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 
 #include <algorithm>
 #include <cmath>
@@ -104,8 +105,36 @@ std::vector<TPoint2D> pointList(const std::string& file, const node_t& n, const 
     return out;
 }
 
+/** 0 if `text` is well-formed UTF-8, else the 1-based offset of the first bad byte. */
+size_t firstNonUtf8Byte(const std::string& text)
+{
+    const auto* b = reinterpret_cast<const unsigned char*>(text.data());
+    const size_t n = text.size();
+    for (size_t i = 0; i < n;)
+    {
+        const unsigned c = b[i];
+        size_t len = c < 0x80           ? 1
+                     : (c >> 5) == 0x6  ? 2
+                     : (c >> 4) == 0xE  ? 3
+                     : (c >> 3) == 0x1E ? 4
+                                        : 0;
+        if (len == 0 || (len == 2 && c < 0xC2) || i + len > n) return i + 1;
+        for (size_t k = 1; k < len; ++k)
+            if ((b[i + k] & 0xC0) != 0x80) return i + 1;
+        i += len;
+    }
+    return 0;
+}
+
 mrpt::containers::yaml parseYaml(const std::string& text, const std::string& name)
 {
+    // Checked here: the YAML parser's own error for it leaks memory (MRPT 2.5 with libfyaml 0.7),
+    // and a file saved in another encoding deserves its own message.
+    if (const size_t bad = firstNonUtf8Byte(text); bad)
+        throw std::runtime_error(
+            name + ":" +
+            std::to_string(1 + std::count(text.begin(), text.begin() + bad - 1, '\n')) +
+            ": not UTF-8 text (byte " + std::to_string(bad) + "): save the file as UTF-8");
     try
     {
         return mrpt::containers::yaml::FromText(text);
@@ -186,8 +215,19 @@ TransmitterMap TransmitterMap::fromYamlText(
             fail(name, e, where + ": give 'array' or 'array_elements', not both");
         if (const node_t* a = get("array"))
         {
-            std::string path = a->as<std::string>();
-            if (!path.empty() && path[0] != '/') path = baseDir + "/" + path;
+            // Beside this file, else by name from the data folder (`ap-linear-4`).
+            std::string path;
+            try
+            {
+                path = config::resolveConfigPath(
+                           a->as<std::string>(), baseDir.empty() ? "." : baseDir, "arrays",
+                           where + ".array")
+                           .path;
+            }
+            catch (const std::invalid_argument& ex)
+            {
+                fail(name, *a, ex.what());
+            }
             t.array = loadArrayFile(path);
         }
         else if (const node_t* el = get("array_elements"))

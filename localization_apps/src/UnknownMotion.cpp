@@ -4,7 +4,9 @@
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/poses/CPosePDFParticles.h>
 #include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/localization/IniValues.h>
 #include <mrpt_wifi/localization/UnknownMotion.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
 
 #include <algorithm>
 #include <cmath>
@@ -49,7 +51,11 @@ mrpt::obs::CActionRobotMovement2D::Ptr walkAction(
     auto a = mrpt::obs::CActionRobotMovement2D::Create();
     // Also fills the action's raw odometry increment.
     a->computeFromOdometry(increment, mm);
-    if (wideFraction <= 0) return a;
+    if (wideFraction <= 0)
+    {
+        keepUsableByMrptFilter(*a);
+        return a;
+    }
     const size_t nWide = 50, nTight = wideFraction < 1 ? 150 : 0;
     auto pdf = mrpt::poses::CPosePDFParticles::Create(nTight + nWide);
     auto& rng = mrpt::random::getRandomGenerator();
@@ -67,6 +73,7 @@ mrpt::obs::CActionRobotMovement2D::Ptr walkAction(
                                            : std::log((1 - wideFraction) / double(nTight));
     }
     a->poseChange = pdf;
+    keepUsableByMrptFilter(*a);
     return a;
 }
 
@@ -87,6 +94,16 @@ void requireFraction(double v, const std::string& what)
 }
 }  // namespace
 
+void keepUsableByMrptFilter(mrpt::obs::CActionRobotMovement2D& action)
+{
+    // The limit of CActionCollection::getBestMovementEstimation() (MRPT 2.5).
+    constexpr double kMrptMaxMovementCovDet = 1e3;
+    if (!action.poseChange) return;
+    const double det = action.poseChange->getCovariance().det();
+    if (!(det < kMrptMaxMovementCovDet))
+        action.estimationMethod = mrpt::obs::CActionRobotMovement2D::emScan2DMatching;
+}
+
 mrpt::obs::CActionRobotMovement2D::Ptr UnknownMotion::makeAction(
     double dt_s, const mrpt::poses::CPose2D& increment) const
 {
@@ -99,6 +116,13 @@ mrpt::obs::CActionRobotMovement2D::Ptr UnknownMotion::makeAction(
 void UnknownMotion::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& cfg, const std::string& s)
 {
+    config::requireKnownKeys(cfg, s, config::sectionKeys("UnknownMotion"));
+    requireIniNumbers(
+        cfg, s,
+        {"max_speed_mps", "max_turn_rate_dps", "correlation_time_s", "max_step_s", "min_std_xy",
+         "min_std_phi_deg", "velocity_window_s", "wide_fraction", "wide_correlation_time_s",
+         "bearing_weight"});
+    requireIniBools(cfg, s, {"constant_velocity", "forward_only"});
     maxSpeed_mps = cfg.read_double(s, "max_speed_mps", maxSpeed_mps);
     maxTurnRate_dps = cfg.read_double(s, "max_turn_rate_dps", maxTurnRate_dps);
     correlationTime_s = cfg.read_double(s, "correlation_time_s", correlationTime_s);
@@ -177,6 +201,12 @@ mrpt::obs::CActionRobotMovement2D::Ptr OdometryMotion::makeAction(
 void OdometryMotion::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& cfg, const std::string& s)
 {
+    requireIniNumbers(
+        cfg, s,
+        {"std_xy_per_sqrt_m", "std_phi_deg_per_sqrt_m", "std_xy_per_sqrt_s",
+         "std_phi_deg_per_sqrt_s", "max_step_s", "jump_rate_hz", "jump_std_xy_m",
+         "jump_std_phi_deg", "bearing_weight"});
+    config::requireKnownKeys(cfg, s, config::sectionKeys("OdometryMotion"));
     stdXY_per_sqrt_m = cfg.read_double(s, "std_xy_per_sqrt_m", stdXY_per_sqrt_m);
     stdPhi_deg_per_sqrt_m = cfg.read_double(s, "std_phi_deg_per_sqrt_m", stdPhi_deg_per_sqrt_m);
     stdXY_per_sqrt_s = cfg.read_double(s, "std_xy_per_sqrt_s", stdXY_per_sqrt_s);

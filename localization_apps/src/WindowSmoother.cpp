@@ -5,7 +5,9 @@
 #include <mrpt/system/CTicTac.h>
 #include <mrpt_wifi/localization/BearingLikelihood.h>
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
+#include <mrpt_wifi/localization/IniValues.h>
 #include <mrpt_wifi/localization/WindowSmoother.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +32,14 @@ GraphSlamOptions WindowSmootherOptions::defaultGraph()
 void WindowSmootherOptions::loadFromConfigFile(
     const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
+    config::requireKnownKeys(c, s, config::sectionKeys("WindowSmoother"));
+    requireIniNumbers(
+        c, s,
+        {"window_s", "min_window_s", "solve_period_s", "max_median_whitened_residual",
+         "max_filter_spread_m", "max_recent_residual_deg", "node_period_s", "odometry_scale_std",
+         "odometry_yaw_drift_deg_per_m", "min_std_deg", "bearing_decorrelation_m", "max_iterations",
+         "track_window_s", "track_switch_cost", "track_restart_headings"});
+    requireIniBools(c, s, {"enabled", "without_odometry"});
     enabled = c.read_bool(s, "enabled", enabled);
     window_s = c.read_double(s, "window_s", window_s);
     minWindow_s = c.read_double(s, "min_window_s", minWindow_s);

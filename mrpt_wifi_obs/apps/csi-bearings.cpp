@@ -13,6 +13,7 @@
 #include <mrpt/system/datetime.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 #include <mrpt_wifi/obs/CsiPreprocessing.h>
 #include <mrpt_wifi/obs/RawlogReader.h>
 #include <mrpt_wifi/obs/bearing/BearingChainConfig.h>
@@ -34,12 +35,17 @@ namespace fs = std::filesystem;
 
 namespace
 {
+/** A file of the installed data folder (any --prefix) or the source tree's share/. */
 std::string findShareFile(const std::string& relative)
 {
-    for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
-        if (fs::exists(fs::path(base) / relative)) return (fs::path(base) / relative).string();
-    throw std::runtime_error(
-        "cannot find '" + relative + "' in the mrpt_wifi share folder; pass --array FILE");
+    try
+    {
+        return config::findDataFile(relative);
+    }
+    catch (const std::invalid_argument& e)
+    {
+        throw std::runtime_error(std::string(e.what()) + "; pass --array FILE");
+    }
 }
 
 /** A TUM trajectory file: (time [s], planar pose) per line, sorted by time. */
@@ -103,7 +109,7 @@ int main(int argc, char** argv)
                 "Estimates WiFi bearings (AoA, AoD) from the CSI observations of a rawlog and "
                 "writes a rawlog with the original objects plus mrpt_wifi::CObservationWiFiBearing "
                 "and mrpt::obs::CObservationBearingRange after each CSI frame that gave one. "
-                "Captures: convert them with csi-pcap2rawlog first.",
+                "Captures (pcap, .dat, ESP32 lines, ROS bags): convert them with csi-import first.",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(
                 "input", "Input rawlog with CObservationWiFiCSI", true, "", "IN.rawlog", cmd);

@@ -102,6 +102,11 @@ int runMain(const std::string& program, const std::function<int()>& body)
         std::cerr << program << ": error: " << exceptionMessage(e) << std::endl;
         return 1;
     }
+    catch (...)  // not derived from std::exception: still an error message, not an abort
+    {
+        std::cerr << program << ": error: unexpected exception (not a std::exception)" << std::endl;
+        return 1;
+    }
 }
 
 }  // namespace mrpt_wifi::cli

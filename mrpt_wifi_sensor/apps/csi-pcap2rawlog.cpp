@@ -28,7 +28,8 @@ int main(int argc, char** argv)
             TCLAP::CmdLine cmd(
                 "Converts a CSI capture into an MRPT rawlog of mrpt_wifi::CObservationWiFiCSI "
                 "observations. The format is detected from the content (not the file name); "
-                "--format forces one. Formats:" +
+                "--format forces one. csi-pcap2rawlog is the old name of csi-import, kept as an "
+                "alias. Formats:" +
                     formats,
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(

@@ -11,21 +11,31 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <set>
 
 using namespace mrpt_wifi;
 
 namespace
 {
-/** Waits for the first CSI frame on `target` arriving on the data path; seconds from `start`. */
-std::optional<double> waitFirstFrame(
+struct FirstFrame
+{
+    std::optional<double> downtime;  //!< s from `start` to the first frame on the target
+    uint64_t datagrams = 0;          //!< received meanwhile
+    std::set<std::string> channels;  //!< of the frames received meanwhile
+};
+
+/** Waits for the first CSI frame on `target` arriving on the data path. */
+FirstFrame waitFirstFrame(
     UdpCsiReceiver& rx, CsiFrameAssemblerOptions options, const Chanspec& target,
     mrpt::Clock::time_point start, double timeout_s)
 {
-    std::optional<double> downtime;
+    FirstFrame r;
+    auto& downtime = r.downtime;
     CsiFrameAssembler assembler(
         options,
         [&](CObservationWiFiCSI::Ptr&& f)
         {
+            r.channels.insert(f->chanspec.asString());
             if (!downtime && f->chanspec.sameChannel(target))
                 downtime = std::chrono::duration<double>(f->timestamp - start).count();
         });
@@ -35,11 +45,14 @@ std::optional<double> waitFirstFrame(
     {
         rx.receive(
             [&](const uint8_t* d, size_t n, mrpt::Clock::time_point t, const std::string& src)
-            { assembler.push(d, n, t, src); },
+            {
+                ++r.datagrams;
+                assembler.push(d, n, t, src);
+            },
             std::chrono::milliseconds(10));
         assembler.flushExpired(mrpt::Clock::now());
     }
-    return downtime;
+    return r;
 }
 }  // namespace
 
@@ -56,7 +69,12 @@ int main(int argc, char** argv)
                 "  switch CH/BW       retune (157/80 or 155/80); --measure reports the downtime\n"
                 "  scan               list access points (wl scan / scanresults)\n"
                 "  status             the router's current chanspec\n"
-                "  transmit start|stop  beacon injection (transmitter mode)",
+                "  transmit start|stop  beacon injection (transmitter mode)\n"
+                "Exit status: 0 done; 1 bad command line or .ini; 4 the router could not be "
+                "controlled (ssh: connection refused, timed out, no route, authentication, host "
+                "key, missing key file; or a router command failed: the message says which and "
+                "what to check); switch --measure: 5 no datagram arrived, 6 datagrams but no CSI "
+                "frame on the new channel. See docs/troubleshooting.md.",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argCommand(
                 "command", "setup|configure|switch|scan|status|transmit", true, "", "COMMAND", cmd);
@@ -121,92 +139,121 @@ int main(int argc, char** argv)
             if (argPasswordEnv.isSet()) s.ssh.passwordEnvVar = argPasswordEnv.getValue();
 
             NexmonRouterControl router(std::make_shared<SshRouterShell>(s.ssh), s.setup);
-            const auto& command = argCommand.getValue();
-            const auto& args = argArgs.getValue();
-            const auto needArgs = [&](size_t n, const char* usage)
+            try
             {
-                if (args.size() != n)
-                    throw std::invalid_argument(std::string("usage: csi-router ") + usage);
-            };
-            std::cerr << "csi-router: router " << router.shell().describe() << "\n";
-            if (command == "setup")
-            {
-                needArgs(0, "setup");
-                router.loadFirmwareModule();
-                std::cout << "firmware module loaded, " << s.setup.interface5G << " bridged to "
-                          << s.setup.bridge << "\n";
-            }
-            else if (command == "configure" || command == "switch")
-            {
-                if (command == "switch")
+                const auto& command = argCommand.getValue();
+                const auto& args = argArgs.getValue();
+                const auto needArgs = [&](size_t n, const char* usage)
                 {
-                    needArgs(1, "switch CH/BW [--measure]");
-                    s.extraction.chanspec = Chanspec::fromString(args[0]);
+                    if (args.size() != n)
+                        throw std::invalid_argument(std::string("usage: csi-router ") + usage);
+                };
+                std::cerr << "csi-router: router " << router.shell().describe() << "\n";
+                if (command == "setup")
+                {
+                    needArgs(0, "setup");
+                    router.loadFirmwareModule();
+                    std::cout << "firmware module loaded, " << s.setup.interface5G << " bridged to "
+                              << s.setup.bridge << "\n";
+                }
+                else if (command == "configure" || command == "switch")
+                {
+                    if (command == "switch")
+                    {
+                        needArgs(1, "switch CH/BW [--measure]");
+                        s.extraction.chanspec = Chanspec::fromString(args[0]);
+                    }
+                    else
+                        needArgs(0, "configure");
+                    std::unique_ptr<UdpCsiReceiver> rx;
+                    if (argMeasure.isSet())
+                    {
+                        rx = std::make_unique<UdpCsiReceiver>(s.udp);
+                        // Connect first: the downtime runs from the switch command, as in the
+                        // driver, whose session is always open.
+                        router.shell().run("true", s.setup.commandTimeout_s);
+                    }
+                    const auto start = mrpt::Clock::now();
+                    router.configure(s.extraction);
+                    const double commandTime =
+                        std::chrono::duration<double>(mrpt::Clock::now() - start).count();
+                    std::cout << "CSI on " << s.extraction.chanspec.asString() << " ("
+                              << s.extraction.chanspec.asBroadcomString()
+                              << " in wl notation), command round trip " << std::fixed
+                              << std::setprecision(0) << commandTime * 1e3 << " ms\n";
+                    if (rx)
+                    {
+                        const auto first = waitFirstFrame(
+                            *rx, s.assembler, s.extraction.chanspec, start, argTimeout.getValue());
+                        const std::string within =
+                            " within " + std::to_string(argTimeout.getValue()) + " s on UDP port " +
+                            std::to_string(rx->boundPort());
+                        if (first.datagrams == 0)
+                        {
+                            std::cerr << "csi-router: error: no datagram" << within
+                                      << ": the router was configured but sends no CSI here (this "
+                                         "computer on the router's LAN? udp_port? a firewall?)\n";
+                            return cli::kExitNoDatagrams;
+                        }
+                        if (!first.downtime)
+                        {
+                            std::string seen;
+                            for (const auto& c : first.channels)
+                                seen += (seen.empty() ? "" : ", ") + c;
+                            std::cerr << "csi-router: error: " << first.datagrams
+                                      << " datagrams but no CSI frame on "
+                                      << s.extraction.chanspec.asString() << within
+                                      << " (frames seen on: " << (seen.empty() ? "none" : seen)
+                                      << "; no access point on that channel, or --measure-timeout "
+                                         "too short)\n";
+                            return cli::kExitNoMatchingFrames;
+                        }
+                        std::cout << "switch downtime (request -> first frame): "
+                                  << *first.downtime * 1e3 << " ms\n";
+                    }
+                }
+                else if (command == "scan")
+                {
+                    needArgs(0, "scan");
+                    const auto aps = router.scan(s.extraction.chanspec.band);
+                    std::cout << std::left << std::setw(19) << "BSSID" << std::setw(10) << "RSSI"
+                              << std::setw(9) << "CHANNEL"
+                              << "SSID\n";
+                    for (const auto& ap : aps)
+                        std::cout << std::setw(19) << ap.bssid.asString() << std::setw(10)
+                                  << ap.rssi_dBm << std::setw(9) << ap.chanspec.asString() << "\""
+                                  << ap.ssid << "\"\n";
+                    std::cout << aps.size() << " access points\n";
+                }
+                else if (command == "status")
+                {
+                    needArgs(0, "status");
+                    const auto cs = router.currentChanspec(s.extraction.chanspec.band);
+                    std::cout << "chanspec 0x" << std::hex << cs.raw << std::dec << ": channel "
+                              << cs.asString() << " (" << cs.asBroadcomString()
+                              << " in wl notation)\n";
+                }
+                else if (command == "transmit")
+                {
+                    needArgs(1, "transmit start|stop");
+                    if (args[0] == "start")
+                        router.startTransmitter(s.transmitter, s.extraction.chanspec.band);
+                    else if (args[0] == "stop")
+                        router.stopTransmitter();
+                    else
+                        throw std::invalid_argument("usage: csi-router transmit start|stop");
+                    std::cout << "transmitter " << args[0] << "ed\n";
                 }
                 else
-                    needArgs(0, "configure");
-                std::unique_ptr<UdpCsiReceiver> rx;
-                if (argMeasure.isSet())
-                {
-                    rx = std::make_unique<UdpCsiReceiver>(s.udp);
-                    // Connect first: the downtime runs from the switch command, as in the
-                    // driver, whose session is always open.
-                    router.shell().run("true", s.setup.commandTimeout_s);
-                }
-                const auto start = mrpt::Clock::now();
-                router.configure(s.extraction);
-                const double commandTime =
-                    std::chrono::duration<double>(mrpt::Clock::now() - start).count();
-                std::cout << "CSI on " << s.extraction.chanspec.asString() << " ("
-                          << s.extraction.chanspec.asBroadcomString()
-                          << " in wl notation), command round trip " << std::fixed
-                          << std::setprecision(0) << commandTime * 1e3 << " ms\n";
-                if (rx)
-                {
-                    const auto downtime = waitFirstFrame(
-                        *rx, s.assembler, s.extraction.chanspec, start, argTimeout.getValue());
-                    if (!downtime)
-                        throw std::runtime_error(
-                            "no CSI frame on " + s.extraction.chanspec.asString() + " within " +
-                            std::to_string(argTimeout.getValue()) + " s on UDP port " +
-                            std::to_string(rx->boundPort()));
-                    std::cout << "switch downtime (request -> first frame): " << *downtime * 1e3
-                              << " ms\n";
-                }
+                    throw std::invalid_argument("unknown command '" + command + "' (see --help)");
             }
-            else if (command == "scan")
+            catch (const RouterError& e)
             {
-                needArgs(0, "scan");
-                const auto aps = router.scan(s.extraction.chanspec.band);
-                std::cout << std::left << std::setw(19) << "BSSID" << std::setw(10) << "RSSI"
-                          << std::setw(9) << "CHANNEL"
-                          << "SSID\n";
-                for (const auto& ap : aps)
-                    std::cout << std::setw(19) << ap.bssid.asString() << std::setw(10)
-                              << ap.rssi_dBm << std::setw(9) << ap.chanspec.asString() << "\""
-                              << ap.ssid << "\"\n";
-                std::cout << aps.size() << " access points\n";
+                // The transport or a router command failed: its own status, so scripts can
+                // tell "router not reachable / refused" from a bad command line.
+                std::cerr << "csi-router: error: " << cli::exceptionMessage(e) << "\n";
+                return cli::kExitRouterControlFailed;
             }
-            else if (command == "status")
-            {
-                needArgs(0, "status");
-                const auto cs = router.currentChanspec(s.extraction.chanspec.band);
-                std::cout << "chanspec 0x" << std::hex << cs.raw << std::dec << ": channel "
-                          << cs.asString() << " (" << cs.asBroadcomString() << " in wl notation)\n";
-            }
-            else if (command == "transmit")
-            {
-                needArgs(1, "transmit start|stop");
-                if (args[0] == "start")
-                    router.startTransmitter(s.transmitter, s.extraction.chanspec.band);
-                else if (args[0] == "stop")
-                    router.stopTransmitter();
-                else
-                    throw std::invalid_argument("usage: csi-router transmit start|stop");
-                std::cout << "transmitter " << args[0] << "ed\n";
-            }
-            else
-                throw std::invalid_argument("unknown command '" + command + "' (see --help)");
             return 0;
         });
 }

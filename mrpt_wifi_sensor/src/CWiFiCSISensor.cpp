@@ -58,6 +58,8 @@ void CWiFiCSISensor::loadConfig_sensorSpecific(
     const mrpt::config::CConfigFileBase& c, const std::string& section)
 {
     *settings_ = loadCsiSensorSettings(c, section, m_sensorLabel);
+    for (const auto& note : settings_->pathNotes)
+        MRPT_LOG_WARN_STREAM("[" << m_sensorLabel << "] note: " << note);
     bearingProcessor_.reset();
     if (settings_->bearing.enabled())
     {
@@ -269,6 +271,9 @@ void CWiFiCSISensor::onDatagram(
         if (!settings_->routerAddress.empty() && src != settings_->routerAddress)
         {
             ++counters_.fromOtherSources;
+            auto& seen = counters_.otherSourceAddresses;
+            if (seen.size() < 4 && std::find(seen.begin(), seen.end(), src) == seen.end())
+                seen.push_back(src);
             return;
         }
     }
@@ -590,6 +595,110 @@ void CWiFiCSISensor::logStatus()
     o << bearingStatus();
     if (!lastError().empty()) o << " | last error: " << lastError();
     MRPT_LOG_INFO(o.str());
+}
+
+CWiFiCSISensor::NoFrameDiagnosis CWiFiCSISensor::diagnoseNoFrames(
+    const Counters& before, double seconds) const
+{
+    const auto& s = *settings_;
+    const auto now = counters();
+    const std::string during = "in " + std::to_string(int(std::lround(seconds))) + " s";
+    NoFrameDiagnosis d;
+    if (now.framesDelivered > before.framesDelivered) return d;
+    const uint64_t datagrams = now.datagrams - before.datagrams;
+    const std::string dataPath =
+        s.source == CsiSensorSettings::Source::Udp
+            ? "UDP " + s.udp.bindAddress + ":" +
+                  std::to_string(receiver_ ? receiver_->boundPort() : s.udp.port)
+        : s.source == CsiSensorSettings::Source::Live ? "source " + s.liveSource
+                                                      : "the replay of " + s.pcapFile;
+    using Cause = NoFrameDiagnosis::Cause;
+    if (datagrams == 0)
+    {
+        const std::string error = lastError();
+        if (replay_ && replayFinished_)
+        {
+            d.cause = Cause::ReplayEnded;
+            d.text = "[" + m_sensorLabel + "] " + dataPath + " ended";
+        }
+        else if (!error.empty() && (router_ || pi_))
+        {
+            d.cause = Cause::ControlFailed;
+            d.text = "[" + m_sensorLabel + "] " +
+                     (router_ ? "router control failed: " : "Raspberry Pi control failed: ") +
+                     error + "; and no datagram arrived on " + dataPath + " " + during +
+                     (router_ ? " (check it by hand: csi-router status -c YOUR.ini; "
+                                "docs/troubleshooting.md lists the ssh causes)"
+                              : "");
+        }
+        else if (!error.empty() && !receiver_ && !live_ && !replay_)
+        {
+            d.cause = Cause::NoDatagrams;
+            d.text = "[" + m_sensorLabel + "] the data path could not be opened: " + error +
+                     " (another program on udp_port " + std::to_string(s.udp.port) +
+                     "? udp_bind_address an address of this computer?)";
+        }
+        else
+        {
+            d.cause = Cause::NoDatagrams;
+            d.text = "[" + m_sensorLabel + "] no datagram at all on " + dataPath + " " + during +
+                     ": " +
+                     (s.source == CsiSensorSettings::Source::Udp
+                          ? std::string(
+                                s.routerControl
+                                    ? (configuredChannel() ? "the router was configured"
+                                                           : "the router's configuration has "
+                                                             "not finished")
+                                    : "router_control = false: nothing here configures the router "
+                                      "(run csi-router configure -c YOUR.ini, or set "
+                                      "router_control = true)") +
+                                "; check that it streams to this computer (csi-router status; the "
+                                "Nexmon datagrams go to UDP port 5500 on the router's LAN: this "
+                                "computer must be on that LAN, udp_port must be the port they go "
+                                "to, udp_bind_address must not exclude them) and that no firewall "
+                                "drops UDP port " +
+                                std::to_string(s.udp.port) + " (nft list ruleset, ufw status)"
+                          : std::string("check the device and that it captures CSI"));
+        }
+        return d;
+    }
+    d.cause = Cause::NoMatchingFrames;
+    const uint64_t other = now.fromOtherSources - before.fromOtherSources;
+    const uint64_t mac = now.framesFilteredMac - before.framesFilteredMac;
+    const uint64_t rssi = now.framesFilteredRssi - before.framesFilteredRssi;
+    const uint64_t accepted = now.assembler.accepted - before.assembler.accepted;
+    std::string text = "[" + m_sensorLabel + "] " + std::to_string(datagrams) + " datagrams on " +
+                       dataPath + " " + during + " but no CSI frame passed: ";
+    if (other == datagrams)
+    {
+        std::string seen;
+        for (const auto& a : now.otherSourceAddresses) seen += (seen.empty() ? "" : ", ") + a;
+        text += "all came from other addresses than router_address = " + s.routerAddress +
+                " (seen: " + seen +
+                "); set router_address to the address the CSI comes from (10.10.10.10 for "
+                "Nexmon on an RT-AC86U), or leave it empty to accept any";
+    }
+    else if (accepted == 0)
+        text += "none is a CSI datagram the decoder accepts (format = " +
+                std::string(nexmon::toString(s.assembler.format)) + "; " +
+                now.assembler.asString() +
+                "): is another program sending to this port, or the firmware another variant?";
+    else if (mac > 0 && mac >= rssi)
+        text += std::to_string(mac) +
+                " frames from transmitters that mac_filter (or the router's packet_mac_filter) "
+                "excludes: widen mac_filter or check the access points' MAC addresses "
+                "(csi-router scan)";
+    else if (rssi > 0)
+        text += std::to_string(rssi) +
+                " frames weaker than min_rssi_dBm = " + std::to_string(s.minRssi_dBm) +
+                ": lower it or move closer";
+    else
+        text +=
+            "datagrams were accepted but formed no frame yet (core_mask / stream_mask "
+            "expect chains that never arrive? " +
+            now.assembler.asString() + ")";
+    d.text = text;
+    return d;
 }
 
 CWiFiCSISensor::Counters CWiFiCSISensor::counters() const

@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/config/CConfigFileBase.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
 #include <mrpt_wifi/sensor/CWiFiOdometryUdpSensor.h>
 
 #include <cctype>
@@ -25,6 +26,8 @@ CWiFiOdometryUdpSensor::~CWiFiOdometryUdpSensor() = default;
 void CWiFiOdometryUdpSensor::loadConfig_sensorSpecific(
     const mrpt::config::CConfigFileBase& c, const std::string& section)
 {
+    mrpt_wifi::config::requireKnownKeys(
+        c, section, mrpt_wifi::config::sectionKeys("CWiFiOdometryUdpSensor"));
     const int port = c.read_int(section, "udp_port", -1, true);
     if (port < 0 || port > 65535)
         throw std::invalid_argument(

@@ -1,66 +1,17 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/bits_math.h>
 #include <mrpt/system/string_utils.h>
+#include <mrpt_wifi/obs/ConfigKeys.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 #include <mrpt_wifi/sensor/CsiLiveSource.h>
 #include <mrpt_wifi/sensor/CsiSensorSettings.h>
 
 #include <algorithm>
-#include <set>
 
 namespace mrpt_wifi
 {
 namespace
 {
-/** Edit distance, to suggest the key a typo meant. */
-size_t editDistance(const std::string& a, const std::string& b)
-{
-    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i)
-    {
-        cur[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j)
-            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
-        std::swap(prev, cur);
-    }
-    return prev[b.size()];
-}
-
-/** Every key a [section] of this driver may hold: CGenericSensor's, rawlog-grabber's, ours. */
-const std::set<std::string>& knownKeys()
-{
-    static const std::set<std::string> keys = {
-        // MRPT's own
-        "driver", "process_rate", "max_queue_len", "grab_decimation", "sensorLabel",
-        "rawlog-grabber-ignore",
-        // pose of the receive array on the robot (m, deg)
-        "pose_x", "pose_y", "pose_z", "pose_yaw", "pose_pitch", "pose_roll",
-        // data path
-        "source", "udp_bind_address", "udp_port", "udp_receive_buffer", "pcap_file", "pcap_speed",
-        "serial_baud", "router_address", "mac_filter", "min_rssi_dBm", "format", "overwritten_bins",
-        "frame_timeout", "core_mask", "stream_mask", "status_period", "abort_on_error",
-        "record_chain_states",
-        // control path: WiROS's 'login', 'channel', 'packet', 'setup' groups
-        "router_control", "login_host", "login_port", "login_user", "login_identity_file",
-        "login_known_hosts", "login_accept_new_host_key", "login_password_env", "login_askpass",
-        "login_connect_timeout", "ssh_persistent_session", "command_timeout", "setup_load_module",
-        "setup_module_path", "setup_bridge", "setup_interface_5g", "setup_interface_2g4", "channel",
-        "packet_mac_filter", "packet_delay", "packet_first_byte",
-        // Raspberry Pi control (NexmonPiControl)
-        "pi_control", "pi_interface", "pi_monitor_interface", "pi_tool_dir",
-        // transmitter mode
-        "transmitter_mode", "transmitter_mac", "transmitter_rate_hz", "transmitter_streams",
-        "transmitter_count",
-        // scanning and automatic channel
-        "scan_period", "scan_wait", "scanner", "scan_interface", "auto_channel",
-        "auto_min_rssi_gain_dB", "auto_min_dwell_s", "auto_min_rssi_dBm", "auto_ssid",
-        "auto_mac_filter",
-        // bearings computed live (LiveBearingWorker)
-        "bearing_algorithm", "bearing_calibration", "bearing_array", "bearing_options",
-        "bearing_tx_arrays", "bearing_queue_length", "bearing_calibration_max_age_days"};
-    return keys;
-}
-
 unsigned parseUnsigned(const std::string& text, const std::string& key, unsigned maxValue)
 {
     try
@@ -89,21 +40,8 @@ CsiSensorSettings loadCsiSensorSettings(
     const std::string& sensorLabel)
 {
     CsiSensorSettings settings;
-    std::vector<std::string> keys;
-    c.getAllKeys(section, keys);
-    for (const auto& k : keys)
-    {
-        if (knownKeys().count(k)) continue;
-        std::string best;
-        size_t bestDistance = 4;
-        for (const auto& known : knownKeys())
-            if (const size_t d = editDistance(k, known); d < bestDistance)
-                bestDistance = d, best = known;
-        throw std::invalid_argument(
-            "section '" + section + "': unknown key '" + k + "'" +
-            (best.empty() ? std::string() : " (did you mean '" + best + "'?)") +
-            "; see share/rawlog-grabber/ for the keys of CWiFiCSISensor");
-    }
+    // Unknown keys: named with the key meant (a typo, another name, another section).
+    config::requireKnownKeys(c, section, config::sectionKeys("CWiFiCSISensor"));
 
     auto& s = settings;
     const auto str = [&](const std::string& key, const std::string& def)
@@ -274,6 +212,35 @@ CsiSensorSettings loadCsiSensorSettings(
                         std::string("key '") + k + "' needs bearing_algorithm (bearings are off)");
         if (s.autoChannel && !(s.scanPeriod_s > 0))
             throw std::invalid_argument("auto_channel = true needs scan_period > 0");
+        // Files named here: from this .ini's folder (rawlog-grabber's file found on its command
+        // line), arrays also by name from the data folder (mrpt_wifi/obs/ConfigPaths.h).
+        const std::string iniDir = config::iniDirectory(c, section);
+        const auto resolve = [&](std::string& value, const char* key, const char* kind)
+        {
+            auto r =
+                config::resolveConfigPath(value, iniDir, kind, std::string("key '") + key + "'");
+            if (!r.note.empty()) s.pathNotes.push_back(r.note);
+            value = r.path;
+        };
+        if (s.source == CsiSensorSettings::Source::Pcap)
+            resolve(s.pcapFile, "pcap_file", "samples");
+        // The ssh key by the same rule; one not found is left as written, for ssh to report.
+        try
+        {
+            resolve(s.ssh.identityFile, "login_identity_file", "");
+        }
+        catch (const std::invalid_argument&)
+        {
+        }
+        if (b.enabled())
+        {
+            resolve(b.calibration, "bearing_calibration", "");
+            resolve(b.arrayFile, "bearing_array", "arrays");
+            if (!b.optionsFile.empty() && b.optionsFile.front() != '{')
+                resolve(b.optionsFile, "bearing_options", "bearings");
+            b.txArrays = config::resolveConfigPathList(
+                b.txArrays, iniDir, "arrays", "key 'bearing_tx_arrays'", &s.pathNotes);
+        }
     }
     catch (const std::invalid_argument& e)
     {

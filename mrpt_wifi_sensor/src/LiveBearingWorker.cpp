@@ -1,4 +1,5 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
+#include <mrpt_wifi/obs/ConfigPaths.h>
 #include <mrpt_wifi/obs/bearing/BearingChainConfig.h>
 #include <mrpt_wifi/sensor/LiveBearingWorker.h>
 
@@ -17,11 +18,7 @@ namespace fs = std::filesystem;
 
 std::string defaultArrayFile()
 {
-    const std::string rel = "arrays/rt-ac86u.yaml";
-    for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
-        if (fs::exists(fs::path(base) / rel)) return (fs::path(base) / rel).string();
-    throw std::invalid_argument(
-        "cannot find '" + rel + "' in the mrpt_wifi share folder; set the path");
+    return config::findDataFile("arrays/rt-ac86u.yaml");
 }
 
 /** Runs `f`, prefixing any error with the key it came from. */

@@ -67,6 +67,93 @@ const char* toString(RouterErrorKind k)
     return "router error";
 }
 
+std::string explainSshFailure(const std::string& sshStderr, const SshOptions& o)
+{
+    const std::string where = o.host + " port " + std::to_string(o.port);
+    const std::string knownHosts =
+        o.knownHostsFile.empty() ? std::string("~/.ssh/known_hosts") : o.knownHostsFile;
+    // ssh's lines, without the "Warning: Identity file" note and blank lines.
+    std::vector<std::string> lines;
+    std::string identityNote;
+    for (size_t at = 0; at < sshStderr.size();)
+    {
+        size_t end = sshStderr.find('\n', at);
+        if (end == std::string::npos) end = sshStderr.size();
+        std::string line = sshStderr.substr(at, end - at);
+        at = end + 1;
+        while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+        if (line.empty()) continue;
+        if (contains(line, "Identity file") && contains(line, "not accessible"))
+        {
+            identityNote = line.substr(line.find("Identity file"));
+            if (identityNote.back() == '.') identityNote.pop_back();
+        }
+        else
+            lines.push_back(line);
+    }
+    const auto said = [&](const char* what)
+    {
+        return std::any_of(
+            lines.begin(), lines.end(), [&](const std::string& l) { return contains(l, what); });
+    };
+    std::string cause;
+    if (said("Connection refused"))
+        cause = "connection refused: nothing accepts ssh on " + where +
+                " (is the router's SSH server enabled - Administration > System > Enable SSH - "
+                "and is login_port / --port the port it listens on?)";
+    else if (said("timed out"))
+        cause = "connection timed out: no answer from " + where + " within " +
+                std::to_string(int(std::max(1.0, o.connectTimeout_s))) +
+                " s (router off or still booting, login_host / --host wrong, this computer on "
+                "another network, or a firewall dropping the connection)";
+    else if (said("No route to host") || said("Network is unreachable") || said("Host is down"))
+        cause = "no route to " + o.host +
+                ": this computer has no network path to the router (cable or WiFi link, this "
+                "computer's address on the router's network, login_host / --host)";
+    else if (
+        said("Could not resolve hostname") || said("Name or service not known") ||
+        said("Temporary failure in name resolution"))
+        cause = "cannot resolve the host name '" + o.host +
+                "' (login_host / --host: give the router's IP address, e.g. 192.168.50.1)";
+    else if (said("REMOTE HOST IDENTIFICATION HAS CHANGED"))
+        cause = "the router's host key changed since it was stored in " + knownHosts +
+                " (a re-flashed or reset router: remove the old key with ssh-keygen -R '[" +
+                o.host + "]:" + std::to_string(o.port) + "' -f " + knownHosts +
+                "; another machine answering at this address: stop and check)";
+    else if (said("Host key verification failed") || said("host key is known"))
+        cause = "the router's host key is not in " + knownHosts + " (check it once with ssh -p " +
+                std::to_string(o.port) + " " + o.user + "@" + o.host +
+                ", or trust a router never seen before with login_accept_new_host_key = true / "
+                "--accept-new-host-key)";
+    else if (said("Permission denied") || said("Too many authentication failures"))
+        cause = "authentication failed: the router rejected " +
+                (o.passwordEnvVar.empty()
+                     ? (o.identityFile.empty() ? std::string("this user's ssh keys")
+                                               : "the key " + o.identityFile) +
+                           " (put its .pub in the router's Administration > System > Authorized "
+                           "Keys; login_identity_file / --identity; login_user / --user is '" +
+                           o.user + "')"
+                     : "the password in $" + o.passwordEnvVar + " for user '" + o.user +
+                           "' (login_password_env / --password-env, login_user / --user)");
+    else if (
+        said("Connection closed") || said("Connection reset") ||
+        said("kex_exchange_identification"))
+        cause =
+            "the router closed the connection before login (its ssh server refused this "
+            "client: too many sessions, or ssh not allowed from this network - check the "
+            "router's SSH settings)";
+    else if (!lines.empty())
+        cause = lines.back();
+    else if (!identityNote.empty())
+        cause = "ssh failed";
+    else
+        cause = "ssh failed without a message (is '" + o.sshProgram + "' the OpenSSH client?)";
+    if (!identityNote.empty())
+        cause += "; also: " + identityNote +
+                 " (login_identity_file / --identity names a key file that does not exist)";
+    return cause;
+}
+
 RouterErrorKind classifyRouterFailure(const SubprocessResult& r)
 {
     if (r.timedOut) return RouterErrorKind::Timeout;
@@ -74,7 +161,7 @@ RouterErrorKind classifyRouterFailure(const SubprocessResult& r)
     if (r.exitCode == 255)
     {
         if (contains(e, "Host key verification failed") ||
-            contains(e, "REMOTE HOST IDENTIFICATION"))
+            contains(e, "REMOTE HOST IDENTIFICATION") || contains(e, "host key is known"))
             return RouterErrorKind::HostKeyMismatch;
         if (contains(e, "Permission denied") || contains(e, "Too many authentication"))
             return RouterErrorKind::AuthenticationFailed;
@@ -107,6 +194,31 @@ struct SshRouterShell::Session
             ::waitpid(pid, nullptr, 0);
             pid = -1;
         }
+    }
+    /** After ssh ended or broke the pipe: the rest of what it wrote on stderr (the line with
+     *  the cause may come after a warning), until end of file or at most `limit_ms`. */
+    void drainStderr(int limit_ms = 1000)
+    {
+        const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(limit_ms);
+        char buf[4096];
+        while (err >= 0 && std::chrono::steady_clock::now() < until)
+        {
+            pollfd fd = {err, POLLIN, 0};
+            if (::poll(&fd, 1, 50) <= 0) continue;
+            const ssize_t n = ::read(err, buf, sizeof(buf));
+            if (n <= 0) break;
+            errBuf.append(buf, size_t(n));
+        }
+    }
+    /** Exit status of ssh, waiting for it to end. */
+    int waitExit()
+    {
+        const int code = exited();
+        if (code != -2 || pid <= 0) return code;
+        int status = 0;
+        ::waitpid(pid, &status, 0);
+        pid = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     }
     /** Exit status of ssh if it has ended (then the session is unusable), else -2. */
     int exited()
@@ -181,12 +293,25 @@ std::string SshRouterShell::run(const std::string& command, double timeout_s)
     if (options_.persistentSession) return runInSession(command, timeout_s);
     const auto r = runSubprocess(sshArgv(command), timeout_s, askpassEnvironment());
     if (r.exitCode == 0 && !r.timedOut) return r.out;
+    throw failureError(command, r, timeout_s);
+}
+
+RouterError SshRouterShell::failureError(
+    const std::string& command, const SubprocessResult& r, double timeout_s) const
+{
     const auto kind = classifyRouterFailure(r);
-    std::string detail = firstLine(r.err.empty() ? r.out : r.err);
-    if (r.timedOut) detail = "no answer within " + std::to_string(timeout_s) + " s";
-    throw RouterError(
-        kind,
-        describe() + ": '" + command + "' (exit " + std::to_string(r.exitCode) + "): " + detail);
+    if (r.timedOut)
+        return RouterError(
+            kind, describe() + ": '" + command + "': no answer within " +
+                      std::to_string(timeout_s) + " s");
+    // ssh's own failure (not the remote command's): say why and what to check.
+    if (r.exitCode == 255)
+        return RouterError(
+            kind, describe() + ": " + explainSshFailure(r.err, options_) + " (ssh exit 255 on '" +
+                      command + "')");
+    return RouterError(
+        kind, describe() + ": '" + command + "' (exit " + std::to_string(r.exitCode) +
+                  "): " + firstLine(r.err.empty() ? r.out : r.err));
 }
 
 std::string SshRouterShell::runInSession(const std::string& command, double timeout_s)
@@ -194,12 +319,7 @@ std::string SshRouterShell::runInSession(const std::string& command, double time
     const auto fail = [&](const SubprocessResult& r)
     {
         session_.reset();
-        const auto kind = classifyRouterFailure(r);
-        std::string detail = firstLine(r.err.empty() ? r.out : r.err);
-        if (r.timedOut) detail = "no answer within " + std::to_string(timeout_s) + " s";
-        return RouterError(
-            kind, describe() + ": '" + command + "' (exit " + std::to_string(r.exitCode) +
-                      "): " + detail);
+        return failureError(command, r, timeout_s);
     };
 
     if (!session_)
@@ -245,8 +365,9 @@ std::string SshRouterShell::runInSession(const std::string& command, double time
     ::signal(SIGPIPE, SIG_IGN);
     if (::write(s.in, script.data(), script.size()) != ssize_t(script.size()))
     {
+        s.drainStderr();
         SubprocessResult r;
-        r.exitCode = s.exited();
+        r.exitCode = s.waitExit();
         r.err = s.errBuf;
         throw fail(r);
     }
@@ -286,13 +407,8 @@ std::string SshRouterShell::runInSession(const std::string& command, double time
         {
             // ssh ended: it could not connect or authenticate, the router dropped us, or the
             // command ended the remote shell itself.
-            if (code == -2 && s.pid > 0)
-            {
-                int status = 0;
-                ::waitpid(s.pid, &status, 0);
-                s.pid = -1;
-                code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-            }
+            s.drainStderr();
+            if (code == -2) code = s.waitExit();
             SubprocessResult r;
             r.exitCode = code;
             r.err = s.errBuf;

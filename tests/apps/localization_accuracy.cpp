@@ -629,7 +629,7 @@ std::optional<KidnappedFigures> runLiveOnce(
         keys[section + "/bearing_array"] = kShare + "/arrays/rt-ac86u.yaml";
         keys[section + "/" + txKey] = apArray(o);
     };
-    configureChain("wifi-localize", "bearing_tx_array");
+    configureChain("wifi-localize", "bearing_tx_arrays");
     if (o.liveChain == "sensor") configureChain("WIFI_CSI", "bearing_tx_arrays");
     deriveIni(
         kShare + "/localization/wifi-localize-emulator.ini", keys,
@@ -651,7 +651,7 @@ std::optional<KidnappedFigures> runLiveOnce(
     bool listening = test::waitForUdpListener(csiPort, std::chrono::seconds(30));
     if (odo == 0)
         listening = listening && test::waitForUdpListener(odoPort, std::chrono::seconds(5));
-    double simZero = NAN;
+    Trajectory2D truth;  // the emulator's, on the receiver's clock (as the live estimate)
     test::CommandResult r;
     {
         // Not listening: the emulator still runs (wifi-localize then stops when idle or at
@@ -666,10 +666,8 @@ std::optional<KidnappedFigures> runLiveOnce(
             std::cerr << "\n[localization-accuracy] emulator not ready:\n" << emu.log();
             return std::nullopt;
         }
-        std::smatch m;
-        const std::string j = test::readFile(emu.stateDir() + "/summary.json");
-        if (std::regex_search(j, m, std::regex("\"unix_time_at_sim_zero\":\\s*([0-9.]+)")))
-            simZero = std::stod(m[1]);
+        const std::string truthFile = emu.stateDir() + "/truth/trajectory_tum.txt";
+        if (fs::exists(truthFile)) truth = Trajectory2D::fromTumFile(truthFile);
     }
     const std::string what =
         std::string("wifi-localize (") + kRunNames[1][odo] + ", seed " + std::to_string(seed) + ")";
@@ -682,14 +680,12 @@ std::optional<KidnappedFigures> runLiveOnce(
             liveCommand, r.output);
         return std::nullopt;
     }
-    if (!std::isfinite(simZero) || !fs::exists(out / "estimate_tum.txt") ||
+    if (truth.empty() || !fs::exists(out / "estimate_tum.txt") ||
         fs::file_size(out / "estimate_tum.txt") == 0)
         return std::nullopt;
-    // The live estimate is on the receiver's clock: put it on the simulation's.
-    auto est = Trajectory2D::fromTumFile((out / "estimate_tum.txt").string());
-    for (auto& t : est.t) t = room.kidnappedTruth.t.front() + (t - simZero);
-    auto k = kidnappedFigures(
-        est, room.kidnappedTruth, o, readEstimateCovariances(out / "estimate_cov.csv"));
+    // Both on the receiver's clock: compared as they are.
+    const auto est = Trajectory2D::fromTumFile((out / "estimate_tum.txt").string());
+    auto k = kidnappedFigures(est, truth, o, readEstimateCovariances(out / "estimate_cov.csv"));
     room.liveRuns_m[odo].push_back(kidnappedMedian(k));
     room.liveLagP99_ms[odo].push_back(liveLagP99_ms(out / "summary.txt"));
     return k;

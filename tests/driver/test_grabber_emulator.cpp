@@ -46,8 +46,8 @@ TEST(GrabberEmulator, RecordsCsiThroughSshConfiguredRouter)
     // 4 APs x 100 frames/s of 16 datagrams once the grabber has configured the router; the
     // emulator records what it sends and stops sending after 16,000 datagrams (2.5 s of CSI).
     test::EmulatorProcess emu(
-        {"--scenario", scenario("kidnapped"), "--seed", "3", "--record-sent", tmp.file("sent.pcap"),
-         "--max-datagrams", "16000"},
+        {"--scenario", scenario("kidnapped"), "--fault-seed", "3", "--record-sent",
+         tmp.file("sent.pcap"), "--max-datagrams", "16000"},
         port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     test::SshdFixture sshd(emu.toolsDir());
@@ -104,9 +104,9 @@ TEST(GrabberEmulator, InjectedLossAndCorruptionAreCountedAndCaptureGoesOn)
     test::TempDir tmp;
     const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
     test::EmulatorProcess emu(
-        {"--scenario", scenario("kidnapped"), "--seed", "5", "--loss", "0.02", "--corrupt", "0.02",
-         "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80", "--record-sent",
-         tmp.file("sent.pcap"), "--max-datagrams", "40000"},
+        {"--scenario", scenario("kidnapped"), "--fault-seed", "5", "--loss", "0.02", "--corrupt",
+         "0.02", "--duplicate", "0.01", "--reorder", "0.01", "--preconfigured", "155/80",
+         "--record-sent", tmp.file("sent.pcap"), "--max-datagrams", "40000"},
         port, 60);
     ASSERT_TRUE(emu.ready()) << emu.log();
     // No router control here: a receiver that only listens (preconfigured router).

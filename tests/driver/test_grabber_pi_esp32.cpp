@@ -103,7 +103,7 @@ TEST(GrabberPi, LocalControlConfiguresThePiAndItsCsiIsCapturedOnLoopback)
     // 4 APs on 155/80 at 100 frames/s each; the Pi is off until the sensor sets it up, and
     // the emulator stops after 300 datagrams (< 1 s of CSI).
     test::EmulatorProcess emu(
-        {"--device", "raspberry-pi", "--scenario", scenario("kidnapped"), "--seed", "3",
+        {"--device", "raspberry-pi", "--scenario", scenario("kidnapped"), "--fault-seed", "3",
          "--record-sent", tmp.file("sent.pcap"), "--max-datagrams", "300"},
         port, 30);
     ASSERT_TRUE(emu.ready()) << emu.log();
@@ -206,7 +206,7 @@ TEST(GrabberPi, SshControlOfThePiAndAChannelItCannotDoIsNamed)
     test::TempDir tmp;
     const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
     test::EmulatorProcess emu(
-        {"--device", "raspberry-pi", "--scenario", scenario("kidnapped"), "--seed", "4",
+        {"--device", "raspberry-pi", "--scenario", scenario("kidnapped"), "--fault-seed", "4",
          "--record-sent", tmp.file("sent.pcap"), "--max-datagrams", "400"},
         port, 30);
     ASSERT_TRUE(emu.ready()) << emu.log();

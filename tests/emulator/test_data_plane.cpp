@@ -358,7 +358,7 @@ FaultRun runWithFaults(const FaultSettings& s, uint64_t seed, uint64_t maxDatagr
     test::UdpReceiver rx;
     auto o = preconfiguredOptions(rx.port(), tmp);
     o.faults = s;
-    o.seed = seed;
+    o.faultSeed = seed;
     o.speed = 2.0;
     o.duration_s = 1.0;
     o.maxDatagrams = maxDatagrams;

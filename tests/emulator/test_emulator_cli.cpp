@@ -3,12 +3,15 @@
 // emulator-ctl or SIGTERM. Everything on 127.0.0.1, each run bounded by --duration.
 #include <gtest/gtest.h>
 #include <mrpt_wifi/emulator/CsiParams.h>
+#include <mrpt_wifi/sensor/PcapIO.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <sstream>
 
 #include "EmulatorTestSupport.h"
 
@@ -242,4 +245,170 @@ TEST(EmulatorCli, SigtermStopsWithASummaryAndDurationBoundsTheRun)
     EXPECT_EQ(r.exitCode, 0) << r.output;
     EXPECT_LT(test::secondsSince(t0), 3.0);
     EXPECT_NE(r.output.find("duration reached"), std::string::npos);
+}
+
+namespace
+{
+/** The datagrams one emulator run sent (its --record-sent capture), in order. */
+std::vector<std::vector<uint8_t>> sentDatagrams(
+    const test::TempDir& tmp, const test::UdpReceiver& rx, const std::string& name,
+    const std::string& seeds, std::string* output = nullptr)
+{
+    const std::string pcap = tmp.file(name + ".pcap");
+    // Bounded by the datagram count, not by time: the same datagrams on any machine.
+    const auto r =
+        run(emulatorProgram() + " --scenario " + writeScenario(tmp) + " --port " +
+            std::to_string(rx.port()) + " --state-dir " + tmp.file(name) +
+            " --preconfigured 155/80 --speed 10 --duration 60 --max-datagrams 600 --loss 0.3 "
+            "--record-sent " +
+            pcap + " -q " + seeds);
+    EXPECT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("max datagrams reached"), std::string::npos) << r.output;
+    if (output) *output = r.output;
+    std::vector<std::vector<uint8_t>> out;
+    PcapReader reader(pcap, rx.port());
+    for (PcapUdpDatagram d; reader.next(d);)
+        out.emplace_back(d.payload, d.payload + d.payloadLength);
+    return out;
+}
+
+/** The CSI part of each datagram (after the 18-byte Nexmon header). */
+std::set<std::vector<uint8_t>> csiOf(const std::vector<std::vector<uint8_t>>& datagrams)
+{
+    std::set<std::vector<uint8_t>> out;
+    for (const auto& d : datagrams)
+        if (d.size() > nexmon::kHeaderBytes)
+            out.emplace(d.begin() + long(nexmon::kHeaderBytes), d.end());
+    return out;
+}
+
+/** TUM rows (t x y ...), comments skipped. */
+std::vector<std::vector<double>> readTum(const std::string& path)
+{
+    std::vector<std::vector<double>> rows;
+    std::ifstream f(path);
+    for (std::string line; std::getline(f, line);)
+    {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream ss(line);
+        std::vector<double> v;
+        for (double x; ss >> x;) v.push_back(x);
+        if (v.size() == 8) rows.push_back(v);
+    }
+    return rows;
+}
+
+size_t commonCount(const std::set<std::vector<uint8_t>>& a, const std::set<std::vector<uint8_t>>& b)
+{
+    size_t n = 0;
+    for (const auto& x : a) n += b.count(x);
+    return n;
+}
+}  // namespace
+
+TEST(EmulatorCli, ScenarioSeedSetsTheWorldFaultSeedTheFaults)
+{
+    // The scenario file says `seed: 3`. --scenario-seed replaces it (other phases, other CSI);
+    // --fault-seed only changes which datagrams the 30 % loss takes; --seed is the old name of
+    // --fault-seed and says so.
+    test::TempDir tmp;
+    test::UdpReceiver rx;
+    const auto a = sentDatagrams(tmp, rx, "a", "--scenario-seed 3 --fault-seed 1");
+    const auto b = sentDatagrams(tmp, rx, "b", "--scenario-seed 3 --fault-seed 2");
+    const auto c = sentDatagrams(tmp, rx, "c", "--scenario-seed 4 --fault-seed 1");
+    std::string oldNameOutput;
+    const auto d = sentDatagrams(tmp, rx, "d", "--seed 2", &oldNameOutput);
+    const auto e = sentDatagrams(tmp, rx, "e", "--fault-seed 1");
+    ASSERT_EQ(a.size(), 600u);
+    ASSERT_EQ(b.size(), 600u);
+    ASSERT_EQ(c.size(), 600u);
+
+    // Same world, other faults: not the same datagrams, but every frame both sent is the same.
+    EXPECT_NE(a, b);
+    const auto csiA = csiOf(a), csiB = csiOf(b), csiC = csiOf(c);
+    EXPECT_EQ(csiA.size(), a.size());  // every datagram's CSI is its own (noise)
+    EXPECT_GT(commonCount(csiA, csiB), a.size() / 3) << "the same scenario seed, other CSI";
+    // Another world: none of its CSI is the first world's.
+    EXPECT_EQ(commonCount(csiA, csiC), 0u) << "another scenario seed, the same CSI";
+
+    // --seed N = --fault-seed N (with the file's scenario seed), with a note naming both.
+    EXPECT_EQ(d, b);
+    EXPECT_NE(oldNameOutput.find("--seed is the old name of --fault-seed"), std::string::npos)
+        << oldNameOutput;
+    EXPECT_NE(oldNameOutput.find("--scenario-seed"), std::string::npos) << oldNameOutput;
+    // Without --scenario-seed: the file's `seed: 3`.
+    EXPECT_EQ(e, a);
+    EXPECT_NE(
+        test::readFile(tmp.file("a") + "/summary.json").find("\"scenario_seed\": 3"),
+        std::string::npos);
+    EXPECT_NE(
+        test::readFile(tmp.file("c") + "/summary.json").find("\"scenario_seed\": 4"),
+        std::string::npos);
+
+    // The help tells them apart.
+    const auto help = run(emulatorProgram() + " --help").output;
+    for (const char* flag : {"--scenario-seed", "--fault-seed", "--truth-dir"})
+        EXPECT_NE(help.find(flag), std::string::npos) << flag;
+    EXPECT_NE(help.find("Old name of --fault-seed"), std::string::npos) << help;
+
+    // Both names of the fault seed at once, or a scenario seed for a capture: refused.
+    auto r =
+        run(emulatorProgram() + " --scenario " + writeScenario(tmp) +
+            " --seed 2 --fault-seed 2 --duration 1 -q --state-dir " + tmp.file("f"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--fault-seed"), std::string::npos) << r.output;
+    r =
+        run(emulatorProgram() + " --replay " + tmp.file("a.pcap") +
+            " --scenario-seed 2 --duration 1 -q --state-dir " + tmp.file("g"));
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("--scenario-seed needs --scenario"), std::string::npos) << r.output;
+}
+
+TEST(EmulatorCli, WritesTheTruthOnTheReceiversClock)
+{
+    // A driving robot (share/scenarios/kidnapped.yaml). STATE_DIR/truth/trajectory_tum.txt is
+    // stamped with unix time: every datagram arrives within it, and its poses are wifi-sim's
+    // (same scenario seed) at the same time since the start, so no shift is needed to score.
+    test::TempDir tmp;
+    test::UdpReceiver rx;
+    const double rxStartUnix = mrpt::Clock::toDouble(mrpt::Clock::now());  // rx's time 0
+    const double startUnix = mrpt::Clock::toDouble(mrpt::Clock::now());
+    const auto r =
+        run(emulatorProgram() + " --scenario " + test::sourceDir() +
+            "/share/scenarios/kidnapped.yaml --scenario-seed 9 --port " +
+            std::to_string(rx.port()) + " --state-dir " + tmp.file("s") +
+            " --preconfigured 155/80 --speed 4 --duration 60 --max-datagrams 2000 -q");
+    const double endUnix = mrpt::Clock::toDouble(mrpt::Clock::now());
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    rx.waitQuiet();
+    const auto truth = readTum(tmp.file("s/truth/trajectory_tum.txt"));
+    ASSERT_GT(truth.size(), 10u);
+    EXPECT_GE(truth.front()[0], startUnix);
+    EXPECT_LE(truth.back()[0], endUnix);
+    // --speed 4: 4 simulated seconds per second of the receiver's clock.
+    EXPECT_NEAR(truth[1][0] - truth[0][0], 0.01 / 4, 1e-6);
+    // Every datagram arrived while the robot was on the truth's time span (arrival: the
+    // receiver's steady clock from its start, put on unix time; ms apart).
+    const auto received = rx.snapshot();
+    ASSERT_EQ(received.size(), 2000u);
+    for (const auto& d : received)
+    {
+        ASSERT_GE(rxStartUnix + d.time_s, truth.front()[0] - 0.05);
+        ASSERT_LE(rxStartUnix + d.time_s, truth.back()[0] + 0.05);
+    }
+    EXPECT_NE(test::readFile(tmp.file("s/truth/transmitters.yaml")).find("ap-"), std::string::npos);
+
+    const auto sim =
+        run(test::binDir() + "/wifi-sim " + test::sourceDir() + "/share" +
+            "/scenarios/kidnapped.yaml /dev/null -q -s 9 -d 30 -t " + tmp.file("sim"));
+    ASSERT_EQ(sim.exitCode, 0) << sim.output;
+    const auto simTruth = readTum(tmp.file("sim/trajectory_tum.txt"));
+    size_t compared = 0;
+    for (size_t i = 0; i < truth.size() && i < simTruth.size(); ++i, ++compared)
+    {
+        ASSERT_NEAR((truth[i][0] - truth[0][0]) * 4, simTruth[i][0] - simTruth[0][0], 1e-4) << i;
+        ASSERT_NEAR(truth[i][1], simTruth[i][1], 1e-5) << i;
+        ASSERT_NEAR(truth[i][2], simTruth[i][2], 1e-5) << i;
+    }
+    EXPECT_GT(compared, 10u);
 }

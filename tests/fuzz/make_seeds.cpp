@@ -5,7 +5,8 @@
 //                                         DATA_DIR/FORMAT plus one file per length check of
 //                                         that decoder (a declared length that disagrees
 //                                         with the bytes), so the fuzzer starts at each;
-//                                         FORMAT rosmessages: rf_msgs/Wifi and Bearing bytes
+//                                         FORMAT rosmessages: rf_msgs/Wifi and Bearing bytes;
+//                                         FORMAT text, DATA_DIR share/: fuzz_text_inputs
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/serialization/CArchive.h>
@@ -13,6 +14,7 @@
 #include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sensor/RosMessages.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -180,6 +182,69 @@ std::map<std::string, Bytes> rosMessageCases()
     c["bearing-valid"] = ros1::serialize(b);
     return c;
 }
+
+/** fuzz_text_inputs: the first byte picks the reader (0 bearings CSV, 1 TUM, 2 WSR-style CSV
+ *  trajectory, 3 AP map YAML, 4 .ini). The project's shipped YAML and .ini files from
+ *  SHARE_DIR, and small valid CSV and trajectories in every column layout the readers take. */
+std::map<std::string, Bytes> textCases(const fs::path& share)
+{
+    std::map<std::string, Bytes> c;
+    const auto prefixed = [](uint8_t reader, const std::string& text)
+    {
+        Bytes b{reader};
+        b.insert(b.end(), text.begin(), text.end());
+        return b;
+    };
+    const auto prefixedFile = [&](uint8_t reader, const fs::path& p)
+    {
+        Bytes b{reader};
+        const Bytes f = readFile(p);
+        b.insert(b.end(), f.begin(), f.end());
+        return b;
+    };
+    for (const auto& e : fs::recursive_directory_iterator(share))
+    {
+        if (!e.is_regular_file() || e.file_size() > 200000) continue;
+        const auto ext = e.path().extension();
+        const std::string name = fs::relative(e.path(), share).string();
+        if (ext == ".ini") c["ini-" + name] = prefixedFile(4, e.path());
+        if (ext == ".yaml" && name.find("aps") != std::string::npos)
+            c["yaml-" + name] = prefixedFile(3, e.path());
+        if (name == "calibration/transmitters.example.yaml")
+            c["yaml-" + name] = prefixedFile(3, e.path());
+    }
+    c["csv-all-columns"] = prefixed(
+        0,
+        "# comment\n"
+        "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_mirror_deg,aod_deg,aod_std_deg,"
+        "aod_mirror_deg,has_aoa,has_aod,aoa_ambiguous,aod_ambiguous,aoa_alt_deg,aoa_alt_weight,"
+        "aoa_direction_std_deg\n"
+        "1700000000.10,02:00:00:00:0a:01,23.5,4.0,156.5,-12.0,5.0,,1,1,1,0,-40,0.3,3\n"
+        "1700000000.20,ap-b,,,,-12.0,5.0,192,0,1,0,1,,,\n");
+    c["csv-aod-several-per-timestamp"] = prefixed(
+        0,
+        "timestamp,transmitter,aod_deg,aod_std_deg\n"
+        "1700000000.5,ap-a,10,5\n1700000000.5,ap-a,12,5\n1700000000.5,ap-b,-30,5\n");
+    c["csv-reordered-columns"] =
+        prefixed(0, "aoa_deg,transmitter,timestamp\n10,02:00:00:00:0a:02,1700000000\n");
+    c["tum"] = prefixed(
+        1,
+        "# t x y z qx qy qz qw\n"
+        "1700000000.0 1 2 0 0 0 0 1\n1700000000.1 1.05 2 0 0 0 0.0499792 0.9987503\n");
+    c["wsr-csv"] = prefixed(
+        2,
+        "1700000000,0,1,2,0,0,0,0,1\n1700000000,100000000,1.05,2,0,0,0,0,1\n1700000000.5,0,1.1,2,0."
+        "3\n");
+    // Inputs the fuzzer found leaking (fixed): a bad likelihoodOpts value thrown while MRPT's
+    // loader holds the map definition; an AP map that is not UTF-8.
+    c["ini-bad-likelihood-value"] = prefixed(
+        4,
+        "[MetricMap]\nwifiBearingMap_count = 1\n[MetricMap_wifiBearingMap_00_likelihoodOpts]\n"
+        "outlier_prob = 2\n");
+    c["yaml-not-utf8"] =
+        prefixed(3, "transmitters:\n  - {name: caf\xe9, mac: '02:00:00:00:0a:01'}\n");
+    return c;
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -217,13 +282,20 @@ int main(int argc, char** argv)
         cases = nexmonCases(dir);
     else if (format == "rosmessages")
         cases = rosMessageCases();
+    else if (format == "text")
+        cases = textCases(data);
     else
     {
         std::cerr << "fuzz_make_seeds: unknown format '" << format << "'\n";
         return 1;
     }
     for (const auto& [name, bytes] : cases)
-        writeFile(dir / ((format == "rosmessages" ? "" : "length-check-") + name), bytes);
+    {
+        std::string file =
+            (format == "rosmessages" || format == "text" ? "" : "length-check-") + name;
+        std::replace(file.begin(), file.end(), '/', '_');
+        writeFile(dir / file, bytes);
+    }
     std::cout << "wrote " << cases.size() << " length-check seeds for " << format << " to "
               << dir.string() << "\n";
     return 0;

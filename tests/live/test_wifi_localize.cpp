@@ -1,6 +1,6 @@
 /* mrpt_wifi — wifi-localize end to end: the emulator (CSI + odometry stream on 127.0.0.1),
  * the sensors run in-process from an .ini via the plugin, MRPT's particle filter live; errors
- * against the scenario's ground truth on the receiver's clock (as scripts/demo.sh does). */
+ * against the emulator's ground truth (STATE_DIR/truth), written on the receiver's clock. */
 #include <gtest/gtest.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZInputStream.h>
@@ -106,7 +106,7 @@ std::map<std::string, std::string> baseKeys(uint16_t csiPort, uint16_t odoPort)
         {"WIFI_CSI/udp_port", std::to_string(csiPort)},
         {"ODOMETRY/udp_port", std::to_string(odoPort)},
         {"wifi-localize/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
-        {"wifi-localize/bearing_tx_array", kShare + "/arrays/ap-linear-4.yaml"},
+        {"wifi-localize/bearing_tx_arrays", kShare + "/arrays/ap-linear-4.yaml"},
         {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
          kShare + "/localization/kidnapped-aps.yaml"},
         // fewer particles than the shipped file: the test shares the machine
@@ -115,25 +115,11 @@ std::map<std::string, std::string> baseKeys(uint16_t csiPort, uint16_t odoPort)
         {"KLD_options/KLD_maxSampleSize", "1500"}};
 }
 
-double unixTimeAtSimZero(const std::string& stateDir)
+/** The emulator's ground truth (STATE_DIR/truth/trajectory_tum.txt): already on the receiver's
+ *  clock, the one wifi-localize stamps its estimates with, so compared without any shift. */
+Trajectory2D emulatorTruth(const std::string& stateDir)
 {
-    const std::string j = test::readFile(stateDir + "/summary.json");
-    std::smatch m;
-    if (!std::regex_search(j, m, std::regex("\"unix_time_at_sim_zero\":\\s*([0-9.]+)"))) return NAN;
-    return std::stod(m[1]);
-}
-
-/** The scenario's true trajectory shifted onto the receiver's clock. */
-Trajectory2D truthOnClock(const test::TempDir& tmp, double simZero, double seconds)
-{
-    const auto r = test::run(
-        test::binDir() + "/wifi-sim " + kShare + "/scenarios/kidnapped.yaml /dev/null -q -d " +
-        std::to_string(int(seconds)) + " -t " + tmp.file("truth"));
-    EXPECT_EQ(r.exitCode, 0) << r.output;
-    auto gt = Trajectory2D::fromTumFile(tmp.file("truth/trajectory_tum.txt"));
-    const double t0 = gt.t.front();  // wifi-sim's t = 0
-    for (auto& t : gt.t) t = simZero + (t - t0);
-    return gt;
+    return Trajectory2D::fromTumFile(stateDir + "/truth/trajectory_tum.txt");
 }
 
 struct Errors
@@ -197,12 +183,10 @@ LiveRun runLive(
         "/libmrpt_wifi_sensor.so " + ini + " -q -o out -d " + std::to_string(seconds) + " " +
         extraArgs);
     emu.stop();
-    const double zero = unixTimeAtSimZero(emu.stateDir());
-    EXPECT_TRUE(std::isfinite(zero));
-    if (r.result.exitCode == 0 && std::isfinite(zero))
+    if (r.result.exitCode == 0)
     {
         r.estimate = Trajectory2D::fromTumFile(tmp.file("out/estimate_tum.txt"));
-        r.truth = truthOnClock(tmp, zero, seconds + 30);
+        r.truth = emulatorTruth(emu.stateDir());
     }
     return r;
 }
@@ -297,7 +281,7 @@ TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
     // The rawlog holds what the sensors delivered: CSI of 4 APs and the odometry stream.
     mrpt::io::CFileGZInputStream f(tmp.file("seen.rawlog"));
     auto arch = mrpt::serialization::archiveFrom(f);
-    size_t csi = 0, odo = 0;
+    size_t csi = 0, odo = 0, csiInsideTruth = 0;
     for (;;)
     {
         mrpt::serialization::CSerializable::Ptr obj;
@@ -309,9 +293,17 @@ TEST(WifiLocalize, LocalizesTheKidnappedRobotLiveFromTheEmulator)
         {
             break;
         }
-        csi += bool(std::dynamic_pointer_cast<CObservationWiFiCSI>(obj));
+        const auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj);
+        csi += bool(c);
         odo += bool(std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(obj));
+        // The emulator's truth is on the recording's clock: every CSI frame recorded falls
+        // within it (no shift by unix_time_at_sim_zero). The emulator ran on after the run.
+        if (c && !r.truth.empty() && mrpt::Clock::toDouble(c->timestamp) >= r.truth.t.front() &&
+            mrpt::Clock::toDouble(c->timestamp) <= r.truth.t.back())
+            ++csiInsideTruth;
     }
+    EXPECT_EQ(csiInsideTruth, csi)
+        << "truth " << std::fixed << r.truth.t.front() << " .. " << r.truth.t.back();
     // Every observation the sensors delivered is in the recording (the summary counts them; how
     // many arrive in 14 s depends on the machine's load, so no fixed number).
     std::smatch m;
@@ -430,7 +422,7 @@ TEST(WifiLocalize, WarnsWhenTheMapWeighsNoneOfTheBearings)
     test::TempDir tmp;
     const auto r = runLive(
         tmp, 4, false, {}, {},
-        {{"wifi-localize/bearing_algorithm", "default"}, {"wifi-localize/bearing_tx_array", ""}});
+        {{"wifi-localize/bearing_algorithm", "default"}, {"wifi-localize/bearing_tx_arrays", ""}});
     ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
     EXPECT_NE(r.result.output.find("with an angle the map weighs: 0)"), std::string::npos)
         << r.result.output;
@@ -617,4 +609,174 @@ TEST(WifiLocalize, MapsDevicesLiveAndEndsWithTheOfflineMap)
     while (std::getline(csv, line)) localized += line.find(",1,") != std::string::npos;
     EXPECT_EQ(localized, 3u) << liveCsv;
     std::cout << live.output.substr(live.output.find("  device map")) << "\n";
+}
+
+// ---- no usable CSI: the cause, what to check, and its exit status (docs/troubleshooting.md)
+
+namespace
+{
+struct NoCsiRun
+{
+    test::CommandResult result;
+    double seconds = 0;   // wall time of the run
+    std::string summary;  // out/summary.txt
+};
+
+/** wifi-localize on the emulator's .ini (no odometry section) with `keys` changed, the CSI
+ *  sensor on UDP `csiPort`, no_csi_timeout_s = `timeout_s`; bounded by `timeout`. No AP
+ *  calibration: these runs never get as far as weighing a bearing. */
+NoCsiRun runWithoutUsableCsi(
+    const test::TempDir& tmp, uint16_t csiPort, double timeout_s,
+    std::map<std::string, std::string> keys, const std::string& args = "")
+{
+    keys.insert(
+        {{"WIFI_CSI/udp_port", std::to_string(csiPort)},
+         {"wifi-localize/bearing_array", kShare + "/arrays/rt-ac86u.yaml"},
+         {"wifi-localize/bearing_tx_arrays", kShare + "/arrays/ap-linear-4.yaml"},
+         {"wifi-localize/no_csi_timeout_s", std::to_string(timeout_s)},
+         {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
+          kShare + "/localization/kidnapped-aps.yaml"},
+         {"LocalizationExperiment/particles_count", "300"},
+         {"KLD_options/KLD_minSampleSize", "300"},
+         {"KLD_options/KLD_maxSampleSize", "300"}});
+    const auto ini = deriveIni(keys, {"ODOMETRY"}, tmp.file("nocsi.ini"));
+    NoCsiRun r;
+    const auto t0 = std::chrono::steady_clock::now();
+    r.result = test::run(
+        "cd " + tmp.path().string() + " && timeout 180 " + test::binDir() + "/wifi-localize -p " +
+        test::libDir() + "/libmrpt_wifi_sensor.so " + ini + " -q -o out " + args);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.summary = test::readFile(tmp.file("out/summary.txt"));
+    return r;
+}
+}  // namespace
+
+TEST(WifiLocalizeNoCsi, UnreachableRouterIsNamedWithItsExitStatusWithinTheTimeout)
+{
+    test::TempDir tmp;
+    // The router's ssh port: nobody listens there; the key file named does not exist either
+    // (ssh then warns about it first, and the cause must still be the refused connection).
+    const auto r = runWithoutUsableCsi(
+        tmp, test::freeLoopbackPort(SOCK_DGRAM), 3,
+        {{"WIFI_CSI/router_control",
+          "true\nlogin_host = 127.0.0.1\nlogin_port = " + std::to_string(test::freeLoopbackPort()) +
+              "\nlogin_identity_file = " + tmp.file("no_such_key") +
+              "\nlogin_known_hosts = " + tmp.file("known_hosts") + "\nlogin_connect_timeout = 2"}});
+    EXPECT_EQ(r.result.exitCode, 4) << r.result.output;
+    EXPECT_NE(r.result.output.find("no usable CSI for 3 s"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.result.output.find("router control failed"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.result.output.find("connection refused"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.result.output.find("no_such_key"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.summary.find("WARNING        : 0 CSI frames"), std::string::npos) << r.summary;
+    EXPECT_NE(r.summary.find("exit status    : 4"), std::string::npos) << r.summary;
+    // It waited for the timeout, and not much longer (generous bound for a loaded machine).
+    EXPECT_GE(r.seconds, 3.0);
+    EXPECT_LT(r.seconds, 60.0);
+}
+
+TEST(WifiLocalizeNoCsi, EmulatorNotStreamingIsNoDatagrams)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    // Not --preconfigured: the emulated router extracts no CSI until configured.
+    test::EmulatorProcess emu({"--scenario", kShare + "/scenarios/kidnapped.yaml"}, port, 120);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    const auto r = runWithoutUsableCsi(tmp, port, 3, {});
+    EXPECT_EQ(r.result.exitCode, 5) << r.result.output;
+    EXPECT_NE(
+        r.result.output.find("no datagram at all on UDP 127.0.0.1:" + std::to_string(port)),
+        std::string::npos)
+        << r.result.output;
+    EXPECT_NE(r.result.output.find("csi-router configure"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.summary.find("WARNING        : 0 CSI frames"), std::string::npos) << r.summary;
+}
+
+TEST(WifiLocalizeNoCsi, KeepWaitingKeepsRunningAndWarnsEachTimeout)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu({"--scenario", kShare + "/scenarios/kidnapped.yaml"}, port, 120);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    const auto r = runWithoutUsableCsi(tmp, port, 2, {}, "--keep-waiting -d 7");
+    // Ran to its duration, warning with the cause on the way; the run as a whole had no CSI,
+    // so it still ends with that cause's status.
+    EXPECT_NE(r.summary.find("stopped        : duration reached"), std::string::npos)
+        << r.summary << r.result.output;
+    EXPECT_GE(r.seconds, 7.0);
+    size_t warnings = 0;
+    for (size_t at = 0;
+         (at = r.result.output.find("--keep-waiting: still waiting", at)) != std::string::npos;
+         ++at)
+        ++warnings;
+    EXPECT_GE(warnings, 2u) << r.result.output;
+    EXPECT_NE(r.result.output.find("no datagram at all"), std::string::npos) << r.result.output;
+    EXPECT_EQ(r.result.exitCode, 5) << r.result.output;
+}
+
+TEST(WifiLocalizeNoCsi, DatagramsFromAnotherAddressNameTheAddressSeen)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu(
+        {"--scenario", kShare + "/scenarios/kidnapped.yaml", "--preconfigured", "155/80"}, port,
+        120);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    // The real router's CSI source address; the emulator sends from 127.0.0.1.
+    const auto r = runWithoutUsableCsi(tmp, port, 3, {{"WIFI_CSI/router_address", "10.10.10.10"}});
+    EXPECT_EQ(r.result.exitCode, 6) << r.result.output;
+    EXPECT_NE(
+        r.result.output.find("router_address = 10.10.10.10 (seen: 127.0.0.1)"), std::string::npos)
+        << r.result.output;
+}
+
+TEST(WifiLocalizeNoCsi, FramesWithoutABearingChainSaySo)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu(
+        {"--scenario", kShare + "/scenarios/kidnapped.yaml", "--preconfigured", "155/80"}, port,
+        120);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    const auto r = runWithoutUsableCsi(tmp, port, 3, {{"wifi-localize/bearing_algorithm", ""}});
+    EXPECT_EQ(r.result.exitCode, 7) << r.result.output;
+    EXPECT_NE(r.result.output.find("nothing turns them into bearings"), std::string::npos)
+        << r.result.output;
+}
+
+TEST(WifiLocalizeNoCsi, ASensorThatFailsEndsTheRunWithStatus1NotAnAbort)
+{
+    test::TempDir tmp;
+    // abort_on_error: the router control failure ends the sensor's thread with an exception.
+    const auto r = runWithoutUsableCsi(
+        tmp, test::freeLoopbackPort(SOCK_DGRAM), 30,
+        {{"WIFI_CSI/router_control",
+          "true\nabort_on_error = true\nlogin_host = 127.0.0.1\n"
+          "login_port = " +
+              std::to_string(test::freeLoopbackPort())}});
+    EXPECT_EQ(r.result.exitCode, 1) << r.result.output;
+    EXPECT_NE(r.result.output.find("a sensor failed"), std::string::npos) << r.result.output;
+    EXPECT_NE(r.result.output.find("connection refused"), std::string::npos) << r.result.output;
+}
+
+TEST(WifiLocalizeNoCsi, BearingsFromTransmittersOutsideTheMapNameThem)
+{
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu(
+        {"--scenario", kShare + "/scenarios/kidnapped.yaml", "--preconfigured", "155/80"}, port,
+        120);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    // AoA needs no AP calibration; the map is another building's (other MAC addresses), as
+    // when the router listens on a channel where the map's access points do not transmit.
+    const auto r = runWithoutUsableCsi(
+        tmp, port, 4,
+        {{"wifi-localize/bearing_algorithm", "aoa_only"},
+         {"MetricMap_wifiBearingMap_00_creationOpts/transmitters_file",
+          kShare + "/localization/loop-aps.yaml"}});
+    EXPECT_EQ(r.result.exitCode, 8) << r.result.output;
+    EXPECT_NE(
+        r.result.output.find("none from a transmitter of the AP map (heard 02:00:00:00:01:0"),
+        std::string::npos)
+        << r.result.output;
+    EXPECT_NE(r.result.output.find("155/80"), std::string::npos) << r.result.output;
 }

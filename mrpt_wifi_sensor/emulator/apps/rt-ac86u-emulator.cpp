@@ -152,8 +152,29 @@ int main(int argc, char** argv)
             TCLAP::ValueArg<uint64_t> argMaxDatagrams(
                 "", "max-datagrams", "Stop after sending this many datagrams", false, 100000000,
                 "N", cmd);
+            TCLAP::ValueArg<uint32_t> argScenarioSeed(
+                "", "scenario-seed",
+                "Seed of the simulated world: the receiver's and the access points' phase "
+                "offsets and other impairments, the per-frame noise, the drive's and the "
+                "odometry's noise. Replaces the scenario file's `seed:` key (default: that key), "
+                "as wifi-sim --seed does: give wifi-sim the same seed for the same world. The "
+                "room and the transmitters come from the file",
+                false, 1, "N", cmd);
+            TCLAP::ValueArg<uint64_t> argFaultSeed(
+                "", "fault-seed",
+                "Seed of the fault injection only (--loss, --duplicate, --reorder, --corrupt, "
+                "--silence-rate): the same world, other faults",
+                false, 1, "N", cmd);
             TCLAP::ValueArg<uint64_t> argSeed(
-                "", "seed", "Seed of the fault injection", false, 1, "N", cmd);
+                "", "seed", "Old name of --fault-seed (prints a note); not the scenario's seed",
+                false, 1, "N", cmd);
+            TCLAP::ValueArg<std::string> argTruthDir(
+                "", "truth-dir",
+                "Scenario: folder for the ground truth, written as the emulator runs, on the "
+                "receiver's clock (trajectory_tum.txt: unix time at which the robot was at each "
+                "pose, the clock of the recording or of wifi-localize's output, so scoring needs "
+                "no shift; transmitters.yaml) [default: STATE_DIR/truth]",
+                false, "", "DIR", cmd);
             TCLAP::ValueArg<double> argLoss(
                 "", "loss", "Datagram loss probability", false, 0, "P", cmd);
             TCLAP::ValueArg<double> argDuplicate(
@@ -223,7 +244,30 @@ int main(int argc, char** argv)
             o.speed = argSpeed.getValue();
             o.duration_s = argDuration.getValue();
             o.maxDatagrams = argMaxDatagrams.getValue();
-            o.seed = argSeed.getValue();
+            if (argSeed.isSet() && argFaultSeed.isSet())
+                throw std::invalid_argument(
+                    "--seed is the old name of --fault-seed: give only --fault-seed");
+            if (argSeed.isSet())
+                std::cerr << "[rt-ac86u-emulator] note: --seed is the old name of --fault-seed "
+                             "(it sets the fault injection's seed, not the scenario's); the "
+                             "simulated world's seed is --scenario-seed (default: the scenario "
+                             "file's `seed:` key)\n";
+            o.faultSeed = argSeed.isSet() ? argSeed.getValue() : argFaultSeed.getValue();
+            if (argScenarioSeed.isSet())
+            {
+                if (!argScenario.isSet())
+                    throw std::invalid_argument(
+                        "--scenario-seed needs --scenario (a capture replays what was "
+                        "recorded)");
+                o.scenarioSeed = argScenarioSeed.getValue();
+            }
+            if (argTruthDir.isSet() && !argScenario.isSet())
+                throw std::invalid_argument(
+                    "--truth-dir needs --scenario (a capture holds no robot poses)");
+            if (argScenario.isSet())
+                o.truthDir = argTruthDir.isSet()
+                                 ? argTruthDir.getValue()
+                                 : (std::filesystem::path(o.stateDir) / "truth").string();
             o.faults.loss = argLoss.getValue();
             o.faults.duplicate = argDuplicate.getValue();
             o.faults.reorder = argReorder.getValue();
@@ -276,6 +320,11 @@ int main(int argc, char** argv)
                                         "/{wl,nexutil,makecsiparams,insmod,rmmod,brctl,"
                                         "emulator-ctl}")
                           << "\n[rt-ac86u-emulator] socket: " << emulator.socketPath() << "\n";
+                if (!o.truthDir.empty())
+                    std::cerr << "[rt-ac86u-emulator] ground truth on the receiver's clock: "
+                              << o.truthDir << "/trajectory_tum.txt (scenario seed "
+                              << emulator.scenario()->seed << ", fault seed " << o.faultSeed
+                              << ")\n";
                 if (o.device == EmulatedDevice::RaspberryPi && !o.preconfigured)
                     std::cerr << "[rt-ac86u-emulator] CSI is off until the Pi is set up "
                                  "(ip link set wlan0 up; nexutil -Iwlan0 -s500 -b -l34 -v...; iw "

@@ -5,6 +5,7 @@
 #include <mrpt_wifi/emulator/Emulator.h>
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
+#include <mrpt_wifi/sim/GroundTruthWriter.h>
 #include <mrpt_wifi/sim/Simulator.h>
 #include <poll.h>
 #include <unistd.h>
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -222,7 +224,7 @@ Emulator::Emulator(EmulatorOptions options)
       router_(
           opt_.timing, opt_.device == EmulatedDevice::RaspberryPi ? RouterKind::RaspberryPi
                                                                   : RouterKind::RtAc86u),
-      faults_(opt_.seed, opt_.faults)
+      faults_(opt_.faultSeed, opt_.faults)
 {
     const int sources = int(!opt_.scenarioFile.empty()) + int(opt_.scenario.has_value()) +
                         int(!opt_.replayFile.empty());
@@ -261,10 +263,23 @@ Emulator::Emulator(EmulatorOptions options)
     }
 
     if (!opt_.replayFile.empty())
+    {
+        if (opt_.scenarioSeed)
+            throw std::invalid_argument(
+                "a scenario seed needs a scenario (a capture replays what was recorded)");
+        if (!opt_.truthDir.empty())
+            throw std::invalid_argument(
+                "the ground truth needs a scenario (a capture holds no robot poses)");
         source_ = std::make_unique<ReplaySource>(opt_.replayFile, opt_.replayUdpPort);
+    }
     else
-        source_ = std::make_unique<ScenarioSource>(
-            opt_.scenario ? *opt_.scenario : sim::Scenario::fromYamlFile(opt_.scenarioFile));
+    {
+        sim::Scenario sc =
+            opt_.scenario ? *opt_.scenario : sim::Scenario::fromYamlFile(opt_.scenarioFile);
+        if (opt_.scenarioSeed) sc.seed = *opt_.scenarioSeed;
+        source_ = std::make_unique<ScenarioSource>(std::move(sc));
+        if (!opt_.truthDir.empty()) openTruth();
+    }
 
     if (opt_.device == EmulatedDevice::Esp32)
         serial_ = std::make_unique<PtySerialPort>(opt_.serialLink);
@@ -628,9 +643,60 @@ void Emulator::sendDueOdometry(double now)
     }
 }
 
+void Emulator::openTruth()
+{
+    const auto* s = dynamic_cast<const ScenarioSource*>(source_.get());
+    std::error_code ec;
+    fs::create_directories(opt_.truthDir, ec);
+    const fs::path dir(opt_.truthDir);
+    const std::string trajectoryPath = (dir / "trajectory_tum.txt").string();
+    truthTrajectory_ = std::make_unique<std::ofstream>(trajectoryPath);
+    if (!*truthTrajectory_)
+        throw std::runtime_error(
+            "cannot write the ground truth '" + trajectoryPath + "' (--truth-dir)" +
+            (ec ? ": " + ec.message() : std::string()));
+    *truthTrajectory_ << std::fixed
+                      << "# ground truth of the robot base (world frame) on the receiver's clock: "
+                         "unix time at which the emulated robot was at the pose (scenario '"
+                      << s->sim.scenario().name << "', seed " << s->sim.scenario().seed
+                      << "). TUM: t x y z qx qy qz qw\n";
+    truthStep_ = std::max(s->sim.trajectory().timeStep(), 0.01);
+
+    const std::string txPath = (dir / "transmitters.yaml").string();
+    std::ofstream tx(txPath);
+    if (!tx) throw std::runtime_error("cannot write the ground truth '" + txPath + "'");
+    sim::writeTransmittersYaml(tx, s->sim.scenario());
+}
+
+void Emulator::writeDueTruth(double now)
+{
+    const auto* s = dynamic_cast<const ScenarioSource*>(source_.get());
+    if (!truthTrajectory_ || !s || paused_) return;
+    // Each sample is stamped with the wall-clock instant the simulated clock passes it, the
+    // instant the datagrams of that simulated time are sent: the receiver's clock, whatever
+    // the pauses, speed changes and loops before.
+    const double simNow = std::min(simAt(now), s->sim.duration());
+    bool wrote = false;
+    for (double t; (t = double(nextTruthSample_) * truthStep_) <= simNow + 1e-9; ++nextTruthSample_)
+    {
+        const auto p = s->sim.trajectory().poseAt(t);
+        *truthTrajectory_ << std::setprecision(6) << unixOrigin_ + wallAt(t) << " " << p.x << " "
+                          << p.y << " 0 0 0 " << std::setprecision(9) << std::sin(p.phi / 2) << " "
+                          << std::cos(p.phi / 2) << "\n";
+        wrote = true;
+    }
+    // Readable while the emulator runs (a scorer may look during a live run).
+    if (wrote && now - lastTruthFlush_ >= 0.5)
+    {
+        truthTrajectory_->flush();
+        lastTruthFlush_ = now;
+    }
+}
+
 void Emulator::processDue(double now)
 {
     sendDueOdometry(now);
+    writeDueTruth(now);
     refreshCaptures(now);
     double t = 0;
     for (int budget = kItemsPerIteration; budget > 0 && source_->peek(t); --budget)
@@ -695,8 +761,10 @@ StopReason Emulator::run()
                 stopReason_ = StopReason::EndOfSource;
             else
             {
+                writeDueTruth(now);  // up to the scenario's end
                 source_->restart();
                 nextOdometry_ = 0;
+                nextTruthSample_ = 0;
                 simAnchor_ = 0;
                 wallAnchor_ = now;
                 lastItemTime_ = 0;
@@ -757,6 +825,7 @@ StopReason Emulator::run()
         }
     }
     if (sentPcap_) sentPcap_->close();
+    if (truthTrajectory_) truthTrajectory_->flush();
     // Answer the command that stopped us (emulator-ctl stop) before the socket goes away.
     const double drainUntil = uptime_s() + 0.5;
     while (control_ && control_->hasPendingAnswers() && uptime_s() < drainUntil)
@@ -924,13 +993,17 @@ std::string Emulator::statusJson() const
         .str("format", toString(opt_.format))
         .str("destination", sender_->destination().asString())
         .str("state_dir", opt_.stateDir)
+        .str("truth_dir", opt_.truthDir)
+        .raw("scenario_seed", scenario() ? std::to_string(scenario()->seed) : std::string("null"))
+        .uint("fault_seed", opt_.faultSeed)
         .num("speed", speed_)
         .boolean("paused", paused_)
         .boolean("silenced", now < silencedUntil_)
         .num("uptime_s", now)
         .num("sim_time_s", simAt(now))
         // Where simulated time 0 fell on the receiver's clock (valid without pause or speed
-        // changes): shifts wifi-sim's ground truth onto a recording's timestamps.
+        // changes): shifts wifi-sim's ground truth onto a recording's timestamps. The truth
+        // folder (truth_dir) is already on that clock.
         .raw("unix_time_at_sim_zero", mrpt::format("%.6f", unixOrigin_ + wallAt(0)))
         .str("stop_reason", toString(stopReason_));
     std::vector<std::string> caps;

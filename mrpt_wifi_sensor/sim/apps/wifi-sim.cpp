@@ -7,6 +7,7 @@
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CommandLine.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
 #include <mrpt_wifi/sim/GroundTruthWriter.h>
@@ -26,14 +27,12 @@ using namespace mrpt_wifi;
 
 namespace
 {
-/** share/arrays of the source tree or of the installation. */
+/** share/arrays of the installation (any --prefix) or of the source tree (ConfigPaths.h). */
 std::string arraysDir()
 {
-    namespace fs = std::filesystem;
-    for (const std::string base : {MRPT_WIFI_SOURCE_SHARE_DIR, MRPT_WIFI_INSTALL_SHARE_DIR})
-        if (fs::exists(fs::path(base) / "arrays" / "rt-ac86u.yaml"))
-            return (fs::path(base) / "arrays").string();
-    throw std::runtime_error("cannot find share/arrays/rt-ac86u.yaml for --random-room");
+    return std::filesystem::path(config::findDataFile("arrays/rt-ac86u.yaml"))
+        .parent_path()
+        .string();
 }
 }  // namespace
 
@@ -79,7 +78,11 @@ int main(int argc, char** argv)
                 "", "pcap", "Also write the Nexmon datagrams (one per core and stream) as a pcap",
                 false, "", "OUT.pcap", cmd);
             TCLAP::ValueArg<uint32_t> argSeed(
-                "s", "seed", "Overrides the scenario's seed", false, 0, "N", cmd);
+                "s", "seed",
+                "Overrides the scenario's seed, the simulated world's (impairments such as the "
+                "phase offsets, the drive's and the odometry's noise): rt-ac86u-emulator "
+                "--scenario-seed N plays the same world",
+                false, 0, "N", cmd);
             TCLAP::ValueArg<double> argDuration(
                 "d", "duration", "Overrides the scenario's duration [s]", false, 0, "S", cmd);
             // CSI is noise-like: gzip saves ~7 % and costs ten times the simulation itself.

@@ -28,6 +28,28 @@ void writeTum(std::ostream& o, double unixTime, const mrpt::math::TPose2D& p)
 }
 }  // namespace
 
+void writeTransmittersYaml(std::ostream& txs, const Scenario& sc)
+{
+    txs << std::fixed;
+    txs << std::setprecision(6) << "# transmitters of scenario '" << sc.name
+        << "' (world frame, metres; yaw in degrees)\ntransmitters:\n";
+    for (const auto& t : sc.transmitters)
+    {
+        txs << "  - name: " << t.name << "\n    mac: '" << t.mac.asString() << "'\n"
+            << "    position: [" << t.pose.x << ", " << t.pose.y << "]\n"
+            << "    yaw_deg: " << t.pose.phi * kRad2Deg << "\n"
+            << "    channel: " << t.chanspec.asString() << "\n"
+            << "    streams: " << t.streams << "\n"
+            << "    frame_rate_hz: " << t.frameRate_Hz << "\n"
+            << "    tx_power_dbm: " << t.txPower_dBm << "\n"
+            << "    array_elements: [";
+        for (size_t i = 0; i < t.array.size(); ++i)
+            txs << (i ? ", " : "") << "[" << t.array.elements[i].x << ", " << t.array.elements[i].y
+                << "]";
+        txs << "]\n";
+    }
+}
+
 GroundTruthWriter::GroundTruthWriter(const std::string& dir, const Simulator& sim)
     : sim_(sim), dir_(dir)
 {
@@ -96,23 +118,7 @@ void GroundTruthWriter::finish(double endTime_s)
             traj, sc.startTime_unix + double(i) * step, sim_.trajectory().poseAt(double(i) * step));
 
     auto txs = openOrThrow(dir_ + "/transmitters.yaml");
-    txs << std::setprecision(6) << "# transmitters of scenario '" << sc.name
-        << "' (world frame, metres; yaw in degrees)\ntransmitters:\n";
-    for (const auto& t : sc.transmitters)
-    {
-        txs << "  - name: " << t.name << "\n    mac: '" << t.mac.asString() << "'\n"
-            << "    position: [" << t.pose.x << ", " << t.pose.y << "]\n"
-            << "    yaw_deg: " << t.pose.phi * kRad2Deg << "\n"
-            << "    channel: " << t.chanspec.asString() << "\n"
-            << "    streams: " << t.streams << "\n"
-            << "    frame_rate_hz: " << t.frameRate_Hz << "\n"
-            << "    tx_power_dbm: " << t.txPower_dBm << "\n"
-            << "    array_elements: [";
-        for (size_t i = 0; i < t.array.size(); ++i)
-            txs << (i ? ", " : "") << "[" << t.array.elements[i].x << ", " << t.array.elements[i].y
-                << "]";
-        txs << "]\n";
-    }
+    writeTransmittersYaml(txs, sc);
 
     auto imp = openOrThrow(dir_ + "/impairments.json");
     imp.unsetf(std::ios::fixed);

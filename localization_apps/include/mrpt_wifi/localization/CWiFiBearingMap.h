@@ -28,7 +28,9 @@ namespace mrpt_wifi
  *
  * [MetricMap_wifiBearingMap_00_creationOpts]
  * transmitters_file = /path/to/transmitters.yaml   ; see TransmitterMap (YAML)
- * ; optional: the area the robot can be in (all four or none)
+ * ; optional: the area the robot can be in (all four or none). Without them the area is the
+ * ; [LocalizationExperiment] init_PDF box of a uniform start (init_PDF_mode = 1) of the same
+ * ; file, where a kidnapped robot may be: one source of truth (see areaFromInitialPdf()).
  * min_x = 0
  * max_x = 10
  * min_y = 0
@@ -82,8 +84,15 @@ public:
     void loadTransmitters(const std::string& yamlFile);
 
     /** The area the robot can be in (x and y of the box; z unused), or none (unbounded). */
-    void setArea(const std::optional<mrpt::math::TBoundingBox>& area) { area_ = area; }
+    void setArea(const std::optional<mrpt::math::TBoundingBox>& area)
+    {
+        area_ = area;
+        areaFromInitPdf_ = false;
+    }
     const std::optional<mrpt::math::TBoundingBox>& area() const { return area_; }
+    /** The area was not given in the creationOpts: it is the .ini's init_PDF box (set by the
+     *  map definition; setArea() clears it). */
+    bool areaFromInitialPdf() const { return areaFromInitPdf_; }
     bool inArea(double x, double y) const { return inArea(area_, x, y); }
     /** (x, y) inside `area` (x and y of the box), or no area. */
     static bool inArea(const std::optional<mrpt::math::TBoundingBox>& area, double x, double y)
@@ -116,13 +125,19 @@ public:
     std::string transmittersFile;  //!< `transmitters_file` in `..._creationOpts`
     /** `min_x`, `max_x`, `min_y`, `max_y` in `..._creationOpts` (all four or none) */
     std::optional<mrpt::math::TBoundingBox> area;
+    /** No area in `..._creationOpts`: `area` is the `[LocalizationExperiment]` init_PDF box */
+    bool areaFromInitialPdf = false;
     std::string areaError;  //!< a malformed area, reported when the map is created
+    std::string keyError;   //!< an unknown key, reported when the map is created
+    /** a bad `..._likelihoodOpts` value, reported when the map is created */
+    std::string likelihoodError;
     CWiFiBearingMap::TLikelihoodOptions likelihoodOpts;
     MAP_DEFINITION_END(CWiFiBearingMap)
 
 private:
     localization::TransmitterMap transmitters_;
     std::optional<mrpt::math::TBoundingBox> area_;
+    bool areaFromInitPdf_ = false;
     /** Bookkeeping of unknown transmitters, shared so the map stays copyable (clone()). */
     struct UnknownLog
     {

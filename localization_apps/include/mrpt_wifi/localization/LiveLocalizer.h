@@ -32,8 +32,16 @@ CWiFiBearingMap::Ptr wifiMapFromIni(
  *  (init_PDF_mode = 1): where a kidnapped robot can be, the map's area when the map sets none. */
 std::optional<mrpt::math::TBoundingBox> initialPdfArea(const mrpt::config::CConfigFileBase& ini);
 
-/** Bounds a map without an area of its own by initialPdfArea(); true if it did. */
-bool boundByInitialPdf(CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini);
+/** The map's area and the init_PDF box, one source of truth by default: a map without an area
+ *  of its own takes initialPdfArea() (true returned). When the .ini gives both and they
+ *  disagree, `warning` (if given) says how and what to do: a box reaching outside the area also
+ *  widens the area to cover both (a robot the box allows must not die at the area's edge); an
+ *  area larger than the box is kept (the filter starts in the box). Empty when they agree. */
+bool boundByInitialPdf(
+    CWiFiBearingMap& map, const mrpt::config::CConfigFileBase& ini, std::string* warning = nullptr);
+
+/** "x A..B, y C..D m" */
+std::string boxText(const mrpt::math::TBoundingBox& box);
 
 /** MRPT's Gaussian odometry model as its pf-localization configures it for observation-only
  *  rawlogs: `[DummyOdometryParams] minStdXY` [m] and `minStdPHI` [deg] floors. */
@@ -148,6 +156,9 @@ public:
     const ParticleRecovery& recovery() const { return *recovery_; }
     /** Whether the map's area came from the init_PDF box (the map's creationOpts set none). */
     bool areaFromInitialPdf() const { return areaFromInitPdf_; }
+    /** boundByInitialPdf()'s warning: the .ini's map area and init_PDF box disagree ("" when
+     *  they agree or only one is given). */
+    const std::string& areaWarning() const { return areaWarning_; }
 
 private:
     /** estimate() with the particles' mean already computed (one pass over them, not two). */
@@ -182,6 +193,7 @@ private:
      *  turns since, so the offset counts in every direction. */
     std::optional<mrpt::math::TPose2D> lastSmootherOffset_;
     bool areaFromInitPdf_ = false;
+    std::string areaWarning_;
     double lastStepTime_ = 0;
     size_t steps_ = 0;
     uint64_t bearingsUsed_ = 0, bearingsWeighed_ = 0, unknown_ = 0;

@@ -48,7 +48,8 @@ struct KnownTransmitter
  *     mac: '02:00:00:00:01:01'    # required, unique
  *     position: [0.3, 4.7]        # required
  *     yaw_deg: -45                # boresight of the array frame (default 0)
- *     array: ../arrays/ap-linear-4.yaml          # array file (relative to this file), or
+ *     array: ../arrays/ap-linear-4.yaml          # array file (relative to this file, else
+ *                                                # by name: ap-linear-4), or
  *     array_elements: [[0, -0.039], [0, 0.039]]  # inline elements (x, y) [m]
  * \endcode
  * Keys written by the simulator that don't matter here (channel, streams, frame_rate_hz,

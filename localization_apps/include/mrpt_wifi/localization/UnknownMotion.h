@@ -87,6 +87,18 @@ struct UnknownMotion
     std::string asString() const;
 };
 
+/** Makes sure MRPT's particle filter uses `action` as the step's motion, however wide it is.
+ *  The filter takes the motion from CActionCollection::getBestMovementEstimation(), which
+ *  skips every CActionRobotMovement2D whose pose change has a covariance determinant of 1e3 or
+ *  more unless the action is marked as scan matching; with no motion left the filter throws
+ *  "Action list does not contain any CActionRobotMovement2D ..." (in pf-localization's worker
+ *  thread: an abort). Particles re-seeded over a large area (withReseeding(): 26 x 18 m at a
+ *  re-seeding share of 0.2 is past the limit) or a fast unknown-motion walk over a long step
+ *  get there. Such an action is marked as emScan2DMatching, the only way MRPT offers to have
+ *  it taken whatever its spread; it is then stored with its pose change itself (not as an
+ *  odometry reading plus motion model). Actions under the limit are left as they are. */
+void keepUsableByMrptFilter(mrpt::obs::CActionRobotMovement2D& action);
+
 /** Motion model for a robot with odometry: the odometry increment plus a heavy-tailed random
  *  walk whose spread grows with the distance driven and with time, not with the number of
  *  filter steps.

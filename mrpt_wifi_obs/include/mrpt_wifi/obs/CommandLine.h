@@ -69,4 +69,13 @@ int runMain(const std::string& program, const std::function<int()>& body);
  *  its summary); 1 is a failure, 0 a clean conversion. */
 constexpr int kExitRecordsSkipped = 3;
 
+/** Exit statuses naming why a live program got no usable CSI (wifi-localize after
+ *  no_csi_timeout_s; csi-router for the router and the data path). docs/troubleshooting.md
+ *  lists them per program. */
+constexpr int kExitRouterControlFailed = 4;  //!< ssh or a router command failed
+constexpr int kExitNoDatagrams = 5;          //!< nothing arrived on the UDP port / source
+constexpr int kExitNoMatchingFrames = 6;     //!< datagrams, but no CSI frame passed checks/filters
+constexpr int kExitNoBearings = 7;           //!< CSI frames, but no bearing from them
+constexpr int kExitNoMappedBearings = 8;     //!< bearings, none from a transmitter of the AP map
+
 }  // namespace mrpt_wifi::cli

@@ -10,6 +10,7 @@
 #include <mrpt_wifi/sensor/NexmonPiControl.h>
 #include <mrpt_wifi/sensor/NexmonRouterControl.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -73,8 +74,27 @@ public:
         uint64_t chainStateChanges = 0;  //!< receive-chain jump-state changes (all channels)
         uint64_t chainsWithJumps = 0;    //!< chains seen in more than one state
         CsiFrameAssemblerStats assembler;
+        /** The first few addresses whose datagrams router_address dropped (what to set it to). */
+        std::vector<std::string> otherSourceAddresses;
     };
     Counters counters() const;
+
+    /** Why the data path delivered no frame (wifi-localize's no_csi_timeout_s). */
+    struct NoFrameDiagnosis
+    {
+        enum class Cause
+        {
+            None,              //!< frames were delivered
+            ControlFailed,     //!< configuring the router / Pi failed, and no datagram came
+            NoDatagrams,       //!< nothing arrived on the data path
+            NoMatchingFrames,  //!< datagrams, but no frame passed the checks and filters
+            ReplayEnded        //!< source = pcap reached its end
+        };
+        Cause cause = Cause::None;
+        std::string text;  //!< the cause and what to check, with the keys to change
+    };
+    /** Compares counters() now with `before` (taken `seconds` ago). */
+    NoFrameDiagnosis diagnoseNoFrames(const Counters& before, double seconds) const;
     /** Why the sensor is in the error state (empty when it isn't). */
     std::string lastError() const;
     /** The channel the router was last configured to (nullopt before the first success). */
@@ -102,7 +122,7 @@ private:
     std::vector<uint8_t> replayPending_;
     std::string replayPendingSource_;
     mrpt::Clock::time_point replayPendingTime_;
-    bool replayFinished_ = false;
+    std::atomic<bool> replayFinished_{false};
     void onDatagram(
         const uint8_t* data, size_t len, mrpt::Clock::time_point t, const std::string& src);
     void onFrame(CObservationWiFiCSI::Ptr&& frame);

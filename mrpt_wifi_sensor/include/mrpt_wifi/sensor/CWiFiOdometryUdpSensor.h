@@ -11,13 +11,14 @@
 
 namespace mrpt_wifi
 {
-/** Wheel odometry received as small text datagrams over UDP (loopback), as
- *  `rt-ac86u-emulator --odometry-port N` streams the scenario robot's odometry: one
- *  CObservationOdometry per datagram, stamped with its kernel arrival time (like the CSI), so
- *  live programs and rawlog-grabber get the robot's motion without hardware.
+/** Wheel odometry received as small text datagrams over UDP (loopback), sent by the robot's
+ *  own software (Debian's MRPT has no robot-base driver; share/odometry/send_odometry.py is an
+ *  example sender) or by `rt-ac86u-emulator --odometry-port N`: one CObservationOdometry per
+ *  datagram, stamped with its kernel arrival time (like the CSI), for rawlog-grabber and
+ *  wifi-localize.
  *
- *  Datagram (ASCII, one line): `MRPT_WIFI_ODO 1 SEQ SIM_TIME_S X Y PHI VX VY OMEGA`
- *  (share/emulator/README.md). Malformed datagrams are counted and reported, never turned into
+ *  Datagram (ASCII, one line): `MRPT_WIFI_ODO 1 SEQ T X Y PHI VX VY OMEGA`
+ *  (share/odometry/README.md). Malformed datagrams are counted and reported, never turned into
  *  observations; gaps in SEQ are counted as lost.
  *
  *  .ini keys (besides CGenericSensor's sensorLabel, process_rate, ...):

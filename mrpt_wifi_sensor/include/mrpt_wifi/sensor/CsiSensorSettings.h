@@ -68,6 +68,11 @@ struct CsiSensorSettings
     AccessPointSelectorOptions selector;
 
     LiveBearingSettings bearing;  //!< `bearing_*`: bearings next to the capture (off: empty)
+
+    /** Files named by the section (pcap_file, bearing_*) are resolved on loading
+     *  (mrpt_wifi/obs/ConfigPaths.h); where one was found somewhere unexpected (the working
+     *  directory, the data folder) a line for the log. */
+    std::vector<std::string> pathNotes;
 };
 
 /** Reads a [section] of a rawlog-grabber .ini. Unknown keys and bad values throw

@@ -88,9 +88,21 @@ private:
     uint64_t commandCounter_ = 0;
     std::map<std::string, std::string> askpassEnvironment() const;
     std::string runInSession(const std::string& command, double timeout_s);
+    /** The RouterError of a failed command: ssh's own failures explained (explainSshFailure). */
+    RouterError failureError(
+        const std::string& command, const SubprocessResult& r, double timeout_s) const;
 };
 
 /** Classifies a failed ssh / remote command from its exit code and stderr. */
 RouterErrorKind classifyRouterFailure(const SubprocessResult& r);
+
+/** Why ssh itself failed (exit status 255), from everything it wrote on stderr, as one
+ *  sentence naming the cause (connection refused, timed out, no route, unknown host name,
+ *  authentication, unknown or changed host key, missing identity file, closed by the router)
+ *  and what to check, with the .ini key / csi-router option to change. The cause is taken from
+ *  the line that names it, not ssh's first line (often a warning such as "Identity file ...
+ *  not accessible", which is added as a note). Never contains a password (ssh never prints
+ *  one). */
+std::string explainSshFailure(const std::string& sshStderr, const SshOptions& options);
 
 }  // namespace mrpt_wifi

@@ -73,7 +73,17 @@ struct EmulatorOptions
     double speed = 1.0;                   //!< simulated seconds per wall-clock second
     double duration_s = 3600.0;           //!< wall-clock bound of run()
     uint64_t maxDatagrams = 100'000'000;  //!< bound on datagrams put on the wire
-    uint64_t seed = 1;                    //!< fault injection (the scenario has its own seed)
+    /** Seed of the fault injection (loss, duplication, reordering, corruption, silences) only;
+     * the simulated world has its own seed, scenarioSeed. */
+    uint64_t faultSeed = 1;
+    /** Seed of the simulated world (impairments such as the receiver's phase offsets, the
+     * multipath, the drive's noise): replaces the scenario's `seed:` key, as wifi-sim --seed
+     * does. Unset: the scenario's own. */
+    std::optional<uint32_t> scenarioSeed;
+    /** Scenario mode: folder for the ground truth written live, on the receiver's clock
+     * (trajectory_tum.txt: unix time at which the robot was at each pose, the clock the CSI
+     * and odometry datagrams are timestamped with on arrival; transmitters.yaml). Empty: none. */
+    std::string truthDir;
     FaultSettings faults;
     RouterTiming timing;
     /** Start with the CSI module loaded and CSI configured on this channel (no setup needed). */
@@ -193,6 +203,8 @@ private:
     void refreshCaptures(double now);
     void processDue(double now);
     void sendDueOdometry(double now);
+    void writeDueTruth(double now);
+    void openTruth();
     void processScenarioFrame(CObservationWiFiCSI& obs, double t);
     void processReplayDatagram(std::vector<uint8_t>& d, double t);
     void emit(std::vector<uint8_t>&& datagram, double t);
@@ -211,6 +223,10 @@ private:
     std::unique_ptr<LoopbackUdpSender> sender_;
     std::unique_ptr<LoopbackUdpSender> odometrySender_;  //!< odometryPort != 0
     size_t nextOdometry_ = 0;
+    std::unique_ptr<std::ofstream> truthTrajectory_;  //!< truthDir/trajectory_tum.txt
+    size_t nextTruthSample_ = 0;                      //!< next sample (× truthStep_) to write
+    double truthStep_ = 0.01;                         //!< simulated seconds between samples
+    double lastTruthFlush_ = 0;
     std::unique_ptr<ControlServer> control_;
     std::unique_ptr<PtySerialPort> serial_;  //!< Esp32
     uint64_t serialLinesQueued_ = 0;

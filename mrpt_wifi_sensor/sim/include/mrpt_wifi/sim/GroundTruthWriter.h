@@ -8,6 +8,11 @@
 
 namespace mrpt_wifi::sim
 {
+/** The transmitters of a scenario as `transmitters.yaml` (name, MAC, position, yaw, channel,
+ * streams, frame rate, power, array elements; world frame), the file wifi-calibrate's
+ * --transmitters and the scorers read. */
+void writeTransmittersYaml(std::ostream& o, const Scenario& sc);
+
 /** Writes the ground truth of a simulation into a folder:
  *  - `trajectory_tum.txt`: robot base ground truth, TUM (`t x y z qx qy qz qw`, unix time);
  *  - `odometry_tum.txt`: the odometry as reported (its own frame), TUM;
