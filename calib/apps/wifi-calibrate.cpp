@@ -86,8 +86,8 @@ int main(int argc, char** argv)
                 "input", "Rawlog with CObservationWiFiCSI (and odometry)", true, "", "IN.rawlog",
                 cmd);
             TCLAP::ValueArg<std::string> argArray(
-                "a", "array", "Receive array geometry file (share/arrays/*.yaml)", true, "",
-                "ARRAY.yaml", cmd);
+                "a", "array", "Receive array: a geometry file, or a shipped one by name (rt-ac86u)",
+                true, "", "ARRAY.yaml", cmd);
             TCLAP::ValueArg<std::string> argTx(
                 "", "tx-position", "Transmitter position x y [m], in the frame of the poses", false,
                 "", "x y", cmd);
@@ -157,7 +157,7 @@ int main(int argc, char** argv)
                 throw std::invalid_argument(
                     "give the transmitter position with exactly one of --tx-position x y or "
                     "--transmitters FILE (or use --static-splitter)");
-            const AntennaArray array = AntennaArray::fromYamlFile(argArray.getValue());
+            const AntennaArray array = AntennaArray::fromFileOrName(argArray.getValue(), "--array");
             if (array.size() < 2)
                 throw std::invalid_argument(
                     "the array '" + array.name + "' has one element: nothing to calibrate");

@@ -82,12 +82,12 @@ std::vector<TransmitterSite> loadTransmitterSites(const std::string& path)
         }
         if (e.has("array"))
         {
-            std::string file = e["array"].as<std::string>();
-            if (!file.empty() && file[0] != '/')
-                file = mrpt::system::extractFileDirectory(path) + file;
+            // Beside this file, else a shipped array by name (`ap-linear-4`).
             try
             {
-                s.array = AntennaArray::fromYamlFile(file);
+                s.array = AntennaArray::fromFileOrName(
+                    e["array"].as<std::string>(), where + ".array",
+                    mrpt::system::extractFileDirectory(path));
             }
             catch (const std::exception& ex)
             {

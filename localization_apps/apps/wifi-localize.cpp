@@ -1066,6 +1066,7 @@ int main(int argc, char** argv)
                                 Clock::now() - lastProfileWanted > std::chrono::milliseconds(500);
                         RejectReason rejectReason = RejectReason::Accepted;
                         if (fallback && !sensorBearingLabels.count(csi->sensorLabel))
+                        {
                             if (auto fb = fallback->process(*csi, &rejectReason))
                             {
                                 if (keep && fallback->estimator().lastProfile())
@@ -1086,6 +1087,7 @@ int main(int argc, char** argv)
                             }
                             else if (rejectReason != RejectReason::Accepted)
                                 ++fallbackRejects[toString(rejectReason)];
+                        }
                     }
                     else
                         ++nOther;

@@ -137,8 +137,8 @@ int main(int argc, char** argv)
                 "DIR/<device>/ch<C>_<BW>mhz.yaml",
                 false, "", "FILE|DIR", cmd);
             TCLAP::ValueArg<std::string> argArray(
-                "", "array", "Receive array file (default: share/arrays/rt-ac86u.yaml)", false, "",
-                "FILE", cmd);
+                "", "array", "Receive array: a file, or a shipped one by name (default: rt-ac86u)",
+                false, "", "FILE", cmd);
             TCLAP::MultiArg<std::string> argTxArray(
                 "", "tx-array",
                 "Transmitter array for AoD: FILE (all transmitters) or MAC=FILE; repeatable", false,
@@ -207,9 +207,10 @@ int main(int argc, char** argv)
             if (argImages.isSet() || argRawlogImages.getValue())
                 estimator->options().keepProfile = true;
 
-            const std::string arrayPath =
-                argArray.isSet() ? argArray.getValue() : findShareFile("arrays/rt-ac86u.yaml");
-            AntennaArray rxArray = AntennaArray::fromYamlFile(arrayPath);
+            AntennaArray rxArray =
+                argArray.isSet()
+                    ? AntennaArray::fromFileOrName(argArray.getValue(), "--array")
+                    : AntennaArray::fromYamlFile(findShareFile("arrays/rt-ac86u.yaml"));
             CalibrationStore calib;
             if (argCalib.isSet()) calib = CalibrationStore::open(argCalib.getValue());
             PreprocessOptions pre = cfg.pre;
@@ -232,11 +233,12 @@ int main(int argc, char** argv)
             {
                 const auto eq = t.find('=');
                 if (eq == std::string::npos)
-                    processor.setDefaultTransmitterArray(AntennaArray::fromYamlFile(t));
+                    processor.setDefaultTransmitterArray(
+                        AntennaArray::fromFileOrName(t, "--tx-array"));
                 else
                     processor.setTransmitterArray(
                         MacAddress::fromString(t.substr(0, eq)),
-                        AntennaArray::fromYamlFile(t.substr(eq + 1)));
+                        AntennaArray::fromFileOrName(t.substr(eq + 1), "--tx-array"));
             }
 
             std::vector<std::pair<double, mrpt::math::TPose2D>> tumOdometry;
@@ -456,7 +458,7 @@ int main(int argc, char** argv)
                 odometryLine = o.str();
             }
             std::cout << "Input : " << argIn.getValue() << " (" << csiSeen << " CSI frames)\n"
-                      << "Array : " << rxArray.name << " (" << arrayPath << ")"
+                      << "Array : " << rxArray.name << " (" << rxArray.sourcePath << ")"
                       << (rxArray.isLinear() ? ", linear: AoA has a mirror candidate" : "") << "\n"
                       << "Calib : " << (calib.empty() ? "none (uncalibrated)" : calib.path())
                       << "\n"

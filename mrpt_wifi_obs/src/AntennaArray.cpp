@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/containers/yaml.h>
 #include <mrpt_wifi/obs/AntennaArray.h>
+#include <mrpt_wifi/obs/ConfigPaths.h>
 
 #include <cmath>
 #include <fstream>
@@ -95,6 +96,22 @@ AntennaArray AntennaArray::fromYamlFile(const std::string& path)
     AntennaArray a = fromYamlText(ss.str(), "'" + path + "'");
     a.sourcePath = path;
     return a;
+}
+
+AntennaArray AntennaArray::fromFileOrName(
+    const std::string& value, const std::string& what, const std::string& baseDir)
+{
+    config::ResolvedPath found;
+    try
+    {
+        found = config::resolveConfigPath(value, baseDir, "arrays", what);
+    }
+    catch (const std::invalid_argument& e)
+    {
+        throw std::runtime_error(e.what());
+    }
+    if (found.path.empty()) throw std::runtime_error(what + ": no antenna array given");
+    return fromYamlFile(found.path);
 }
 
 AntennaArray AntennaArray::fromYamlText(const std::string& text, const std::string& displayName)

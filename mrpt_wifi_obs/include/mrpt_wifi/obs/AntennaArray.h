@@ -46,6 +46,11 @@ struct AntennaArray
     static AntennaArray singleElement();
     /** Loads an array file; throws std::runtime_error naming the file and the problem. */
     static AntennaArray fromYamlFile(const std::string& path);
+    /** As fromYamlFile() for a value a user wrote: a path relative to `baseDir` (empty: the
+     *  working directory) or a shipped array by name (`rt-ac86u`, from the data folder), by
+     *  config::resolveConfigPath()'s rules. `what` names the option or key in errors. */
+    static AntennaArray fromFileOrName(
+        const std::string& value, const std::string& what, const std::string& baseDir = {});
     /** As fromYamlFile() from YAML text; `displayName` is used in messages. */
     static AntennaArray fromYamlText(
         const std::string& text, const std::string& displayName = "<text>");
