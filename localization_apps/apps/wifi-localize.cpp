@@ -641,9 +641,7 @@ int main(int argc, char** argv)
             // ---- plugins, configuration, filter
             for (const auto& p : argPlugin.getValue())
             {
-                std::string err;
-                if (!mrpt::system::loadPluginModules(p, err))
-                    throw std::runtime_error("cannot load plugin '" + p + "': " + err);
+                cli::loadPlugin(p);
             }
             const std::string iniPath = argIni.getValue();
             if (!mrpt::system::fileExists(iniPath))
@@ -818,14 +816,16 @@ int main(int argc, char** argv)
             std::string lastStatusText = "(no data yet)";
 
             // ---- no usable CSI: after no_csi_timeout_s without a bearing from a transmitter
-            // of the map, say why (the first stage of the chain that got nothing) and exit
-            // with that cause's status, unless --keep-waiting.
-            uint64_t nMapped = 0;  // bearings from a transmitter of the map
+            // of the map (or, with map_devices, one the device map takes), say why (the first
+            // stage of the chain that got nothing) and exit with that cause's status, unless
+            // --keep-waiting.
+            uint64_t nMapped = 0;  // bearings the filter or the device map uses
             std::set<std::string> unmappedHeard, channelsSeen;
             std::map<std::string, uint64_t> fallbackRejects;  // why our chain gave no bearing
             const auto noteMapped = [&](const CObservationWiFiBearing& b)
             {
-                if (loc.wifiMap().transmitters().find(b.transmitter))
+                if (loc.wifiMap().transmitters().find(b.transmitter) ||
+                    (mapper.enabled() && recordFromObservation(b).hasAoa))
                     ++nMapped;
                 else if (unmappedHeard.size() < 6)
                     unmappedHeard.insert(b.transmitter.asString());

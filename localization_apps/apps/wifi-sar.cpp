@@ -429,8 +429,9 @@ int main(int argc, char** argv)
             }
             std::cout << "wifi-sar: " << peers.size() - size_t(failed) << " of " << peers.size()
                       << " peers with a bearing\n";
-            // As wifi-calibrate: 2 = it ran, but part of the result could not be determined
-            // (1 stays an error: bad input, nothing done).
-            return failed ? 2 : 0;
+            // As wifi-calibrate: 2 = it ran, but part of the result could not be determined;
+            // no peer with a bearing is no result at all, an error (1).
+            if (failed == 0) return 0;
+            return size_t(failed) == peers.size() ? 1 : 2;
         });
 }

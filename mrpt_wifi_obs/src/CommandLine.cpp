@@ -1,6 +1,7 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/core/bits_math.h>
 #include <mrpt/core/exceptions.h>
+#include <mrpt/system/os.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <unistd.h>
 
@@ -89,6 +90,13 @@ std::string exceptionMessage(const std::exception& e)
             msg.erase(b, std::strlen(banner));
     while (!msg.empty() && (msg.back() == '\n' || msg.back() == ' ')) msg.pop_back();
     return msg;
+}
+
+void loadPlugin(const std::string& path)
+{
+    std::string err;
+    if (!mrpt::system::loadPluginModules(path, err))
+        throw std::runtime_error("cannot load plugin '" + path + "': " + err);
 }
 
 int runMain(const std::string& program, const std::function<int()>& body)

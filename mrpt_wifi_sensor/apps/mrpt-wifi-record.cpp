@@ -166,9 +166,7 @@ int main(int argc, char** argv)
                               << " is built in, not loaded again\n";
                     continue;
                 }
-                std::string err;
-                if (!mrpt::system::loadPluginModules(p, err))
-                    throw std::runtime_error("cannot load plugin '" + p + "': " + err);
+                mrpt_wifi::cli::loadPlugin(p);
             }
             const std::string iniPath = argIni.getValue();
             if (!mrpt::system::fileExists(iniPath))

@@ -29,22 +29,8 @@ const std::string kBin = MRPT_WIFI_BIN_DIR;
 const std::string kIni =
     std::string(MRPT_WIFI_SOURCE_DIR) + "/share/localization/pf-localization-wifi.ini";
 
-struct RunResult
-{
-    int rc;
-    std::string out;
-};
-RunResult run(const std::string& cmd)
-{
-    RunResult r{-1, {}};
-    FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-    if (!p) return r;
-    char buf[4096];
-    while (size_t n = fread(buf, 1, sizeof(buf), p)) r.out.append(buf, n);
-    const int st = pclose(p);
-    r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
+using test::CommandResult;
+using test::run;
 
 /** The shipped .ini with `values` replacing its keys' values (any section) and, if given, an
  *  area of the map's own added to its creationOpts. */
@@ -182,22 +168,23 @@ void expectHallRunLocalizes(bool withOdometry)
         run(kBin + "/wifi-pf-localization " + ini + " -b " + h.bearings +
             (withOdometry ? " --odometry-tum " + h.odometry : "") + " -g " + h.truth + " -o " +
             out + " -n 2000 -q --no-plots");
-    ASSERT_EQ(r.rc, 0) << r.out;
-    EXPECT_EQ(r.out.find("terminate called"), std::string::npos) << r.out;
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output.find("terminate called"), std::string::npos) << r.output;
     EXPECT_NE(
-        r.out.find("area           : x 0.00..26.00 y 0.00..18.00 m, 0 estimates outside it (the "
-                   "init_PDF box)"),
+        r.output.find("area           : x 0.00..26.00 y 0.00..18.00 m, 0 estimates outside it (the "
+                      "init_PDF box)"),
         std::string::npos)
-        << r.out;
+        << r.output;
     // What made MRPT's filter throw: particles re-seeded over the whole hall in steps 0.5 s
     // apart. The input must still get there, or this test no longer covers the abort.
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(: ([0-9]+) episodes, ([0-9]+) steps)")))
-        << r.out;
-    EXPECT_GT(std::stoi(m[2]), 0) << r.out;
+    ASSERT_TRUE(
+        std::regex_search(r.output, m, std::regex(R"(: ([0-9]+) episodes, ([0-9]+) steps)")))
+        << r.output;
+    EXPECT_GT(std::stoi(m[2]), 0) << r.output;
     // A sensible answer: the initial distribution's mean (13, 9) is ~6 m from the drive.
-    const double median = summaryNumber(r.out, "after converged", "median");
-    EXPECT_LT(median, 2.0) << r.out;
+    const double median = summaryNumber(r.output, "after converged", "median");
+    EXPECT_LT(median, 2.0) << r.output;
 }
 }  // namespace
 
@@ -238,7 +225,7 @@ struct TallRoom : ::testing::Test
         world().odometry.saveTum(dir + "/odometry.txt");
         world().truth.saveTum(dir + "/truth.txt");
     }
-    RunResult localize(const std::string& ownArea)
+    CommandResult localize(const std::string& ownArea)
     {
         const std::string ini = dir + "/room.ini";
         std::ofstream(ini) << iniFrom(
@@ -257,32 +244,33 @@ struct TallRoom : ::testing::Test
 TEST_F(TallRoom, TheMapsAreaIsTheInitBoxWhenNotGiven)
 {
     const auto r = localize("");
-    ASSERT_EQ(r.rc, 0) << r.out;
-    EXPECT_EQ(r.out.find("warning: "), std::string::npos) << r.out;
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_EQ(r.output.find("warning: "), std::string::npos) << r.output;
     EXPECT_NE(
-        r.out.find("area           : x 0.00..5.00 y 0.00..10.00 m, 0 estimates outside it (the "
-                   "init_PDF box)"),
+        r.output.find("area           : x 0.00..5.00 y 0.00..10.00 m, 0 estimates outside it (the "
+                      "init_PDF box)"),
         std::string::npos)
-        << r.out;
-    EXPECT_LT(summaryNumber(r.out, "after converged", "median"), 0.3) << r.out;
+        << r.output;
+    EXPECT_LT(summaryNumber(r.output, "after converged", "median"), 0.3) << r.output;
 }
 
 TEST_F(TallRoom, AnAreaThatCutsTheInitBoxIsWidenedWithAWarning)
 {
     const auto r = localize("min_x = 0\nmax_x = 10\nmin_y = 0\nmax_y = 5\n");
-    ASSERT_EQ(r.rc, 0) << r.out;
+    ASSERT_EQ(r.exitCode, 0) << r.output;
     EXPECT_NE(
-        r.out.find(
+        r.output.find(
             "warning: " + dir +
             "/room.ini: the init_PDF box ([LocalizationExperiment] "
             "init_PDF_min_x, init_PDF_max_x, init_PDF_min_y, init_PDF_max_y: x 0..5, y "
             "0..10 m) reaches outside the map's area"),
         std::string::npos)
-        << r.out;
-    EXPECT_NE(r.out.find("the area is widened to x 0..10, y 0..10 m"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find("area           : x 0.00..10.00 y 0.00..10.00 m"), std::string::npos)
-        << r.out;
+        << r.output;
+    EXPECT_NE(r.output.find("the area is widened to x 0..10, y 0..10 m"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("area           : x 0.00..10.00 y 0.00..10.00 m"), std::string::npos)
+        << r.output;
     // Not silently wrong: the half of the room beyond y = 5 localizes as well as the rest.
-    EXPECT_LT(summaryNumber(r.out, "after converged", "median"), 0.3) << r.out;
-    EXPECT_LT(summaryNumber(r.out, "after converged", "p90"), 0.6) << r.out;
+    EXPECT_LT(summaryNumber(r.output, "after converged", "median"), 0.3) << r.output;
+    EXPECT_LT(summaryNumber(r.output, "after converged", "p90"), 0.6) << r.output;
 }

@@ -62,6 +62,10 @@ private:
  * carry (what a user should read); trailing white space trimmed. */
 std::string exceptionMessage(const std::exception& e);
 
+/** Loads an MRPT plugin library (`-p`); a path, as MRPT's own tools take it. Throws naming
+ *  the library and the loader's reason when it cannot be loaded. */
+void loadPlugin(const std::string& path);
+
 /** Runs a program body, turning exceptions into a message on stderr and exit code 1. */
 int runMain(const std::string& program, const std::function<int()>& body);
 
