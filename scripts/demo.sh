@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The end-to-end demo: installs what is needed, builds, then runs the whole story with no
-# hardware (a few minutes; outputs and PNG plots in demo-output/, or $DEMO_OUT):
+# hardware (about 4 minutes once built; outputs and PNG plots in demo-output/, or $DEMO_OUT):
 #   1. record: an emulated RT-AC86U (robot among 4 access points, share/scenarios/kidnapped.yaml)
 #      sends Nexmon CSI to 127.0.0.1 and is configured over ssh (a throw-away sshd on
 #      127.0.0.1) by Debian's rawlog-grabber with the CWiFiCSISensor plugin;
@@ -15,7 +15,7 @@
 #      under Xvfb, screenshot in live/live_view.png;
 #   5. drift correction: wifi-graphslam on a long drifting drive (share/scenarios/loop.yaml);
 #   6. device mapping: wifi-iot-map on share/scenarios/iot.yaml (its own 2.4 GHz calibration);
-#   7. a tcpdump capture (share/samples/, the project's encoder) -> rawlog (csi-pcap2rawlog).
+#   7. a tcpdump capture (share/samples/, the project's encoder) -> rawlog (csi-import).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -156,7 +156,7 @@ rm -f "$out/iot.rawlog"
   --truth "$out/iot_truth/transmitters.yaml" -o "$out/iot_map" -q | tail -8
 
 echo "== 7. A tcpdump capture (share/samples/, made by the project's encoder) -> rawlog"
-"$bin/csi-pcap2rawlog" "$share/samples/sample_4x4_80mhz.pcap" "$out/sample.rawlog" -q | tail -3
+"$bin/csi-import" "$share/samples/sample_4x4_80mhz.pcap" "$out/sample.rawlog" -q | tail -3
 
 echo
 echo "demo: done. Plots:"

@@ -104,8 +104,9 @@ int main(int argc, char** argv)
                 false, "odometry", "odometry|FILE", cmd);
             TCLAP::ValueArg<std::string> argOrigin(
                 "", "odom-origin",
-                "Pose of the odometry frame in the transmitter's frame: x y yaw (m, m, deg)", false,
-                "0 0 0", "x y yaw", cmd);
+                "Where the odometry reads 0 0 0, in the frame of --tx-position / --transmitters "
+                "(the map's): x y yaw (m, m, deg)",
+                false, "0 0 0", "x y yaw", cmd);
             TCLAP::ValueArg<std::string> argChannel(
                 "c", "channel", "Only this channel (155/80, or Broadcom notation 149/80)", false,
                 "", "CH/BW", cmd);

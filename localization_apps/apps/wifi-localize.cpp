@@ -581,8 +581,8 @@ int main(int argc, char** argv)
                 "no_csi_timeout_s (or in the whole run), the cause: 4 router control failed "
                 "(ssh), 5 no datagrams on the UDP port, 6 datagrams but no CSI frame passed "
                 "(router_address, MAC/RSSI filters, format), 7 CSI frames but no bearings "
-                "(bearing chain, calibration, array), 8 bearings but none from a transmitter of "
-                "the AP map (channel, map). See docs/troubleshooting.md.",
+                "(bearing chain, calibration, array), 8 bearings but none the AP map weighs "
+                "(channel, map, AoD without the APs' calibration). See docs/troubleshooting.md.",
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIni(
                 "config", "sensors + localization .ini", true, "", "CONFIG.ini", cmd);
@@ -819,21 +819,27 @@ int main(int argc, char** argv)
             // of the map (or, with map_devices, one the device map takes), say why (the first
             // stage of the chain that got nothing) and exit with that cause's status, unless
             // --keep-waiting.
-            uint64_t nMapped = 0;  // bearings the filter or the device map uses
+            uint64_t nMapped = 0;     // bearings the filter weighs or the device map uses
+            uint64_t nUnweighed = 0;  // from the map's transmitters, without an angle it weighs
             std::set<std::string> unmappedHeard, channelsSeen;
             std::map<std::string, uint64_t> fallbackRejects;  // why our chain gave no bearing
+            const auto& weighs = loc.wifiMap().likelihoodOptions;
             const auto noteMapped = [&](const CObservationWiFiBearing& b)
             {
-                if (loc.wifiMap().transmitters().find(b.transmitter) ||
-                    (mapper.enabled() && recordFromObservation(b).hasAoa))
+                const auto record = recordFromObservation(b);
+                const bool fromMap = loc.wifiMap().transmitters().find(b.transmitter) != nullptr;
+                if ((fromMap && recordWeighed(record, weighs.model, weighs.use)) ||
+                    (mapper.enabled() && record.hasAoa))
                     ++nMapped;
+                else if (fromMap)
+                    ++nUnweighed;
                 else if (unmappedHeard.size() < 6)
                     unmappedHeard.insert(b.transmitter.asString());
             };
             struct Window
             {
                 Clock::time_point start;
-                uint64_t csi = 0, bearings = 0, mapped = 0;
+                uint64_t csi = 0, bearings = 0, mapped = 0, unweighed = 0;
                 std::vector<CWiFiCSISensor::Counters> counters;  // per sensor (CSI ones)
             };
             const auto csiSensorOf = [](const SensorRunner& r)
@@ -842,7 +848,7 @@ int main(int argc, char** argv)
             {
                 Window w;
                 w.start = Clock::now();
-                w.csi = nCsi, w.bearings = nBearings, w.mapped = nMapped;
+                w.csi = nCsi, w.bearings = nBearings, w.mapped = nMapped, w.unweighed = nUnweighed;
                 for (const auto& r : sensors)
                     w.counters.push_back(
                         csiSensorOf(*r) ? csiSensorOf(*r)->counters() : CWiFiCSISensor::Counters());
@@ -934,6 +940,17 @@ int main(int argc, char** argv)
                             "in its port order (array mismatch: more receive chains than "
                             "array elements)"};
                 }
+                if (nUnweighed > w.unweighed)
+                    return {
+                        cli::kExitNoMappedBearings,
+                        std::to_string(nUnweighed - w.unweighed) +
+                            " bearings from the map's access points " + during +
+                            ", none with an angle the map weighs (" +
+                            weighedAnglesString(weighs.model, weighs.use) +
+                            "): AoD needs the access points' transmit-chain calibration "
+                            "(wifi-calibrate --transmit-chains, in bearing_calibration) and "
+                            "bearing_tx_arrays; AoA needs use_aoa = true in the map's "
+                            "likelihoodOpts; a σ above max_std_deg is not weighed"};
                 std::string heard;
                 for (const auto& m : unmappedHeard) heard += (heard.empty() ? "" : ", ") + m;
                 return {

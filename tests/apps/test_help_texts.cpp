@@ -91,7 +91,9 @@ TEST(HelpTexts, EveryProgramsHelpIsCurrent)
         // The old name of csi-import: only in its alias note and in the alias's own usage line.
         const std::string aliasNote = "csi-pcap2rawlog is the old name of csi-import";
         if (program == "csi-import" || program == "csi-pcap2rawlog")
+        {
             EXPECT_NE(text.find(aliasNote), std::string::npos) << r.output;
+        }
         for (size_t at; (at = text.find(aliasNote)) != std::string::npos;)
             text.erase(at, aliasNote.size());
         if (program == "csi-pcap2rawlog")

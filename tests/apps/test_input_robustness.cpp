@@ -205,8 +205,14 @@ TEST(InputProperties, BearingCsvParsesOrNamesTheFile)
             for (const auto& b : readBearingCsv(writeText(path, text), o, &w))
             {
                 ASSERT_TRUE(std::isfinite(b.t)) << text;
-                if (b.hasAoa) ASSERT_TRUE(std::isfinite(b.aoa) && std::isfinite(b.aoaStd)) << text;
-                if (b.hasAod) ASSERT_TRUE(std::isfinite(b.aod) && std::isfinite(b.aodStd)) << text;
+                if (b.hasAoa)
+                {
+                    ASSERT_TRUE(std::isfinite(b.aoa) && std::isfinite(b.aoaStd)) << text;
+                }
+                if (b.hasAod)
+                {
+                    ASSERT_TRUE(std::isfinite(b.aod) && std::isfinite(b.aodStd)) << text;
+                }
             }
         });
     EXPECT_GT(parsed, 10u);
@@ -325,7 +331,12 @@ TEST(InputProperties, IniValuesOutOfRangeEmptyOrNotNumbersAreNamedErrors)
         mrpt::config::CConfigFileMemory ini;
         ini.setContent(shipped);
         for (const auto& s : sections)
-            if (s.name != "wifi-localize") EXPECT_NO_THROW(s.load(ini)) << s.name;
+        {
+            if (s.name != "wifi-localize")
+            {
+                EXPECT_NO_THROW(s.load(ini)) << s.name;
+            }
+        }
     }
     const std::vector<std::string> notNumbers = {"",     "abc",   "1.5x", "nan", "inf",
                                                  "-inf", "1e400", "1,5",  "true"};

@@ -417,13 +417,18 @@ TEST(WifiLocalize, RunsWithoutOdometry)
 TEST(WifiLocalize, WarnsWhenTheMapWeighsNoneOfTheBearings)
 {
     // The shipped .ini's map weighs AoD only; its own chain without the APs' transmit array
-    // gives AoA only, bearings the map ignores. The run ends normally (nothing recorded is
-    // lost), and the summary and stderr say why the estimate never moved.
+    // gives AoA only, bearings the map ignores. The run ends with its summary written
+    // (nothing recorded is lost), says why the estimate never moved, and is a failure: the
+    // status of bearings the map cannot weigh, naming the calibration to make.
     test::TempDir tmp;
     const auto r = runLive(
         tmp, 4, false, {}, {},
         {{"wifi-localize/bearing_algorithm", "default"}, {"wifi-localize/bearing_tx_arrays", ""}});
-    ASSERT_EQ(r.result.exitCode, 0) << r.result.output;
+    ASSERT_EQ(r.result.exitCode, 8) << r.result.output;
+    EXPECT_NE(r.result.output.find("none with an angle the map weighs"), std::string::npos)
+        << r.result.output;
+    EXPECT_NE(r.result.output.find("wifi-calibrate --transmit-chains"), std::string::npos)
+        << r.result.output;
     EXPECT_NE(r.result.output.find("with an angle the map weighs: 0)"), std::string::npos)
         << r.result.output;
     EXPECT_NE(r.result.output.find("wifi-localize: warning: none of the "), std::string::npos)

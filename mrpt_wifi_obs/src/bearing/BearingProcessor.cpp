@@ -236,10 +236,10 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
             return nullptr;
         lastAperture_[csi.transmitter] = now;
         window.recent(est_->framesWanted(), frames_);
-        ctx.peerRecordingOf = [this](const MacAddress& peer)
+        ctx.peerRecordingOf = [this](const MacAddress& peerMac)
         {
             std::vector<const CleanCsi*> out;
-            peerWindows_.of(peer).recent(est_->framesWanted(), out);
+            peerWindows_.of(peerMac).recent(est_->framesWanted(), out);
             return out;
         };
         const mrpt::poses::CPose2D antenna(csi.sensorPose);

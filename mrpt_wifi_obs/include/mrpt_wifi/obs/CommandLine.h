@@ -80,6 +80,7 @@ constexpr int kExitRouterControlFailed = 4;  //!< ssh or a router command failed
 constexpr int kExitNoDatagrams = 5;          //!< nothing arrived on the UDP port / source
 constexpr int kExitNoMatchingFrames = 6;     //!< datagrams, but no CSI frame passed checks/filters
 constexpr int kExitNoBearings = 7;           //!< CSI frames, but no bearing from them
-constexpr int kExitNoMappedBearings = 8;     //!< bearings, none from a transmitter of the AP map
+constexpr int kExitNoMappedBearings =
+    8;  //!< bearings, none the AP map can weigh (not its APs, or no weighed angle)
 
 }  // namespace mrpt_wifi::cli
