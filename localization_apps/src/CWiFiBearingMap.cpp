@@ -74,33 +74,35 @@ void CWiFiBearingMap::TMapDefinition::loadFromConfigFile_map_specific(
     {
         areaError = e.what();
     }
-    if (!areaError.empty())
-        ;  // reported when the map is created
-    else if (given == 4)
+    if (areaError.empty())  // else reported when the map is created
     {
-        const auto rd = [&](const char* k) { return source.read_double(sect, k, 0); };
-        area = mrpt::math::TBoundingBox(
-            {rd("min_x"), rd("min_y"), 0}, {rd("max_x"), rd("max_y"), 0},
-            mrpt::math::TBoundingBox::CTOR_FLAGS::AllowUnordered);
-        if (!(area->max.x > area->min.x) || !(area->max.y > area->min.y))
-            areaError = "[" + sect + "] the area needs min_x < max_x and min_y < max_y";
-    }
-    else if (given != 0)
-        areaError = "[" + sect +
-                    "] min_x, max_x, min_y, max_y: give all four (the area the robot can be in) "
-                    "or none";
-    else
-    {
-        // One source of truth: the area is where a kidnapped robot may start, in every program
-        // that builds the map from this file (Debian's pf-localization too).
-        try
+        if (given == 4)
         {
-            area = localization::initialPdfArea(source);
-            areaFromInitialPdf = area.has_value();
+            const auto rd = [&](const char* k) { return source.read_double(sect, k, 0); };
+            area = mrpt::math::TBoundingBox(
+                {rd("min_x"), rd("min_y"), 0}, {rd("max_x"), rd("max_y"), 0},
+                mrpt::math::TBoundingBox::CTOR_FLAGS::AllowUnordered);
+            if (!(area->max.x > area->min.x) || !(area->max.y > area->min.y))
+                areaError = "[" + sect + "] the area needs min_x < max_x and min_y < max_y";
         }
-        catch (const std::invalid_argument& e)
+        else if (given != 0)
+            areaError =
+                "[" + sect +
+                "] min_x, max_x, min_y, max_y: give all four (the area the robot can be in) "
+                "or none";
+        else
         {
-            areaError = e.what();
+            // One source of truth: the area is where a kidnapped robot may start, in every program
+            // that builds the map from this file (Debian's pf-localization too).
+            try
+            {
+                area = localization::initialPdfArea(source);
+                areaFromInitialPdf = area.has_value();
+            }
+            catch (const std::invalid_argument& e)
+            {
+                areaError = e.what();
+            }
         }
     }
     likelihoodError.clear();
