@@ -9,7 +9,8 @@
 # sources: OptiTrack (rx_trajectory), T265 and wheel odometry (each rigidly aligned to
 # OptiTrack over the exchanges, so that the bearings are in the frame of the true positions),
 # with their position errors given as --position-std (T265 0.02 m, wheel odometry 0.05 m) and
-# T265's antenna offset (below).
+# T265's antenna offset (below). At the end, WSR's own errors for the same locations beside these
+# (scripts/wsr_compare.py: its output files, matched to the root's drives by start position).
 set -euo pipefail
 # The antenna in the T265's body frame: the lever arm that best maps T265 onto OptiTrack, fitted
 # on the development sets (LOS_Set_A: -0.222 -0.069, NLOS_Set_C: -0.207 -0.085; their mean), a
@@ -54,3 +55,5 @@ if loc:
 PY
   done
 done
+# WSR's own errors on the same samples (its output files for the locations under the root).
+python3 "$(dirname "$0")/wsr_compare.py" "$root" "$@" --ours "$out"

@@ -5,6 +5,7 @@
  * recorded of the robot's packets (--tx), and the robot's trajectory. One bearing per peer. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/core/bits_math.h>
+#include <mrpt/math/wrap2pi.h>
 #include <mrpt/poses/CPose2D.h>
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/localization/DeviceMapper.h>
@@ -174,6 +175,11 @@ int main(int argc, char** argv)
                 false, "", "DIR", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Write one row per peer", false, "", "OUT.csv", cmd);
+            TCLAP::ValueArg<std::string> argExchanges(
+                "", "exchanges",
+                "Write every exchange placed on the trajectory, one row each (mac, time, antenna "
+                "x y, product re im): the estimator's input, to replay or plot",
+                false, "", "OUT.csv", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress", cmd);
             // `--antenna-offset -0.2 -0.08` as documented, or quoted as one token.
             cli::JoinedArgv args(argc, argv, "--antenna-offset", 2);
@@ -305,6 +311,23 @@ int main(int argc, char** argv)
                         peer.exchanges.push_back({pp.time_s, {pose.x, pose.y}, pp.product});
                 }
 
+            if (argExchanges.isSet())
+            {
+                std::ofstream out(argExchanges.getValue());
+                if (!out)
+                    throw std::runtime_error("cannot write '" + argExchanges.getValue() + "'");
+                out << "mac,time,x,y,re,im\n";
+                char row[256];
+                for (const auto& peer : peers)
+                    for (const auto& e : peer.exchanges)
+                    {
+                        std::snprintf(
+                            row, sizeof(row), "%s,%.6f,%.6f,%.6f,%.9g,%.9g\n",
+                            peer.mac.asString().c_str(), e.time_s, e.position.x, e.position.y,
+                            e.product.real(), e.product.imag());
+                        out << row;
+                    }
+            }
             std::ofstream csv;
             if (argCsv.isSet())
             {
@@ -312,10 +335,12 @@ int main(int argc, char** argv)
                 if (!csv) throw std::runtime_error("cannot write '" + argCsv.getValue() + "'");
                 csv << "mac,file,azimuth_deg,azimuth_std_deg,quality,packets_used,start_x,"
                        "start_y,start_time,aperture_m,range_m,pairs,true_azimuth_deg,error_deg,"
-                       "coherence,time_offset,mirror_azimuth_deg,mirror_power\n";
+                       "coherence,time_offset,mirror_azimuth_deg,mirror_power,strong_peaks,"
+                       "direction_std_deg,"
+                       "alternative_azimuth_deg,alternative_weight\n";
             }
             int failed = 0;
-            std::vector<BearingToKnown> toKnownPeers;
+            std::vector<BearingRay> toKnownPeers;
             std::optional<mrpt::math::TPoint2D> start;  // of the first peer with a bearing
             std::vector<BearingRecord> records;
             const auto knownPeers =
@@ -356,13 +381,48 @@ int main(int argc, char** argv)
                         r.aoaAmbiguous = true;
                         r.aoaMirror = std::remainder(est->mirror_rad - at.phi, 2 * M_PI);
                     }
+                    // The profile's other strong peaks, with the weights measured on the
+                    // development sets (SarPeak::weight).
+                    r.aoaDirectionStd = est->azimuthStd_rad;
+                    for (size_t i = 1; i < est->peaks.size(); ++i)
+                    {
+                        const auto& peak = est->peaks[i];
+                        if (peak.weight <= 0) continue;
+                        const double aoa = std::remainder(peak.azimuth_rad - at.phi, 2 * M_PI);
+                        if (!r.hasAoaAlternative)
+                        {
+                            r.hasAoaAlternative = true;
+                            r.aoaAlternative = aoa, r.aoaAlternativeWeight = peak.weight;
+                            r.aoaDirectionStd = est->lobeStd_rad;
+                        }
+                        else
+                            r.moreAoaAlternatives.push_back({aoa, peak.weight});
+                    }
                     records.push_back(r);
                 }
                 if (!start) start = est->start;
                 if (knownPeers)
                     if (const auto* k = knownPeers->find(peer.mac))
-                        toKnownPeers.push_back(
-                            {{k->pose.x, k->pose.y}, est->azimuth_rad, est->azimuthStd_rad});
+                    {
+                        // A ray cast back from the peer; a strong second peak (weight ≥ 0.2)
+                        // enters as the ray's other candidate (the device mapper's mixture),
+                        // each with the σ of a single peak: on the WSR development sets this
+                        // located NLOS_Set_A's receiver to 0.84 m median, p90 1.92 m
+                        // (2.54 m with one direction and the wider σ).
+                        localization::BearingRay ray;
+                        ray.x = k->pose.x, ray.y = k->pose.y;
+                        ray.aoa = mrpt::math::wrapToPi(est->azimuth_rad + M_PI);
+                        ray.sigma = est->azimuthStd_rad;
+                        if (est->peaks.size() > 1 && est->peaks[1].weight >= 0.2)
+                        {
+                            ray.ambiguous = true;
+                            ray.mirror = mrpt::math::wrapToPi(est->peaks[1].azimuth_rad + M_PI);
+                            ray.sigma = std::max(
+                                est->lobeStd_rad, est->azimuthStd_rad * options.onePeakStd_deg /
+                                                      options.severalPeaksStd_deg);
+                        }
+                        toKnownPeers.push_back(ray);
+                    }
                 double trueAz = std::nan(""), err = std::nan("");
                 if (truth)
                     if (const auto* k = truth->find(peer.mac))
@@ -390,13 +450,17 @@ int main(int argc, char** argv)
                     std::snprintf(
                         line, sizeof(line),
                         "%s,%s,%.3f,%.3f,%.4f,%zu,%.4f,%.4f,%.6f,%.3f,%.2f,%zu,%.3f,%.3f,%.4f,%."
-                        "3f,%.3f,%.4f\n",
+                        "3f,%.3f,%.4f,%zu,%.3f,%.3f,%.2f\n",
                         peer.mac.asString().c_str(), peer.file.c_str(),
                         mrpt::RAD2DEG(est->azimuth_rad), mrpt::RAD2DEG(est->azimuthStd_rad),
                         est->quality, est->packetsUsed, est->start.x, est->start.y,
                         est->startTime_s, est->apertureLength_m, est->range_m, peer.pairs,
                         mrpt::RAD2DEG(trueAz), mrpt::RAD2DEG(err), est->coherence, offset,
-                        mrpt::RAD2DEG(est->mirror_rad), est->mirrorPower);
+                        mrpt::RAD2DEG(est->mirror_rad), est->mirrorPower, est->peaks.size(),
+                        mrpt::RAD2DEG(est->lobeStd_rad),
+                        est->peaks.size() > 1 ? mrpt::RAD2DEG(est->peaks[1].azimuth_rad)
+                                              : std::nan(""),
+                        est->peaks.size() > 1 ? est->peaks[1].weight : 0.0);
                     csv << line;
                 }
             }
@@ -404,7 +468,9 @@ int main(int argc, char** argv)
             {
                 // The bearings are taken from each peer's own start; they differ by the packets
                 // dropped at the start, by millimetres.
-                const auto p = locateObserver(toKnownPeers);
+                DeviceMapOptions locateOptions;
+                locateOptions.minRays = 2;  // as locateObserver
+                const auto p = triangulateDevice(toKnownPeers, locateOptions);
                 if (!p.localized)
                     std::cout << "not located: " << p.note << "\n";
                 else

@@ -3,6 +3,8 @@
 #include <mrpt_wifi/localization/BearingRecord.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -143,7 +145,31 @@ std::vector<BearingRecord> readBearingCsv(
                 r.aoaAlternative = wrapToPi(mrpt::DEG2RAD(v));
                 r.aoaAlternativeWeight = weight;
                 r.aoaDirectionStd = mrpt::DEG2RAD(directionStd);
+                // "deg:weight;deg:weight": the second and later alternatives.
+                std::istringstream more(cell("aoa_more_alts"));
+                std::string item;
+                while (std::getline(more, item, ';'))
+                {
+                    if (item.empty()) continue;
+                    const auto colon = item.find(':');
+                    double a = 0, w = 0;
+                    char* end = nullptr;
+                    bool ok = colon != std::string::npos;
+                    if (ok) a = std::strtod(item.c_str(), &end), ok = end == item.c_str() + colon;
+                    if (ok)
+                        w = std::strtod(item.c_str() + colon + 1, &end),
+                        ok = *end == 0 && std::isfinite(a) && w > 0 && w <= 1;
+                    if (!ok)
+                        fail(
+                            "aoa_more_alts: '" + item +
+                            "' is not DEG:WEIGHT with a weight in (0, 1]");
+                    r.moreAoaAlternatives.push_back({wrapToPi(mrpt::DEG2RAD(a)), w});
+                }
             }
+            else if (!cell("aoa_more_alts").empty())
+                fail(
+                    "aoa_more_alts without a first alternative (aoa_alt_deg, aoa_alt_weight, "
+                    "aoa_direction_std_deg)");
         }
         if (flag("has_aod") && num("aod_deg", v))
         {
@@ -173,7 +199,7 @@ void writeBearingCsv(const std::string& path, const std::vector<BearingRecord>& 
     f << "# mrpt_wifi bearings CSV: angles in degrees, AoA in the robot's receive-array frame, "
          "AoD in the transmitter's array frame\n";
     f << "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_mirror_deg,aod_deg,aod_std_deg,"
-         "aod_mirror_deg,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg\n";
+         "aod_mirror_deg,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg,aoa_more_alts\n";
     char buf[256];
     for (const auto& r : records)
     {
@@ -192,7 +218,15 @@ void writeBearingCsv(const std::string& path, const std::vector<BearingRecord>& 
         char weight[32];
         std::snprintf(weight, sizeof(weight), "%.4f", r.aoaAlternativeWeight);
         f << ang(alt, r.aoaAlternative) << ',' << (alt ? weight : "") << ',';
-        f << ang(alt, r.aoaDirectionStd) << '\n';
+        f << ang(alt, r.aoaDirectionStd) << ',';
+        for (size_t i = 0; alt && i < r.moreAoaAlternatives.size(); ++i)
+        {
+            std::snprintf(
+                weight, sizeof(weight), "%s%.3f:%.4f", i ? ";" : "",
+                mrpt::RAD2DEG(r.moreAoaAlternatives[i].aoa), r.moreAoaAlternatives[i].weight);
+            f << weight;
+        }
+        f << '\n';
     }
 }
 

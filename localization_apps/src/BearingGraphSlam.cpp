@@ -404,7 +404,8 @@ GraphSlamResult solveOnce(
                     new ceres::AutoDiffCostFunction<detail::AoaResidual, 1, 3, 3>(
                         new detail::AoaResidual(detail::aoaResidualOf(
                             *a.b, a.offset.x, a.offset.y, a.offset.phi,
-                            decorrelated(*a.b, aoaStd(*a.b)), opt.useAoaAlternatives))),
+                            decorrelated(*a.b, aoaStd(*a.b)), opt.useAoaAlternatives,
+                            detail::robustLossOf(opt.loss, opt.lossScale)))),
                     detail::makeLoss(opt.loss, opt.lossScale), X[a.node].data(), ap),
                 decorrelated(*a.b, aoaStd(*a.b)));
             res.aoaEdges++;

@@ -18,6 +18,23 @@ std::string weighedAnglesString(const RobustBearingModel& model, const BearingUs
         use.aod ? "true" : "false", mrpt::RAD2DEG(model.maxStd_rad));
 }
 
+std::vector<AoaDirection> aoaDirections(const BearingRecord& r, double share)
+{
+    std::vector<AoaDirection> out{{r.aoa, r.aoaMirror, 1.0}};
+    if (!(share > 0) || !r.hasAoaAlternative) return out;
+    double sum = 0;
+    for (const auto& a : r.aoaAlternatives())
+    {
+        const double w = std::clamp(share * a.weight, 0.0, 1.0);
+        out.push_back({a.aoa, aoaMirrorOf(r, a.aoa), w});
+        sum += w;
+    }
+    const double scale = sum > kMaxAlternativesWeight ? kMaxAlternativesWeight / sum : 1.0;
+    for (size_t i = 1; i < out.size(); ++i) out[i].weight *= scale;
+    out[0].weight = 1 - std::min(sum, kMaxAlternativesWeight);
+    return out;
+}
+
 double recordLogLikelihood(
     const BearingRecord& r, const mrpt::math::TPose2D& robot, const KnownTransmitter& tx,
     const RobustBearingModel& model, const BearingUse& use)
@@ -26,16 +43,14 @@ double recordLogLikelihood(
     double ll = 0;
     if (usesAoa(r, model, use) && usesAoaAlternative(r, model))
     {
-        // Each direction with its mirror, as logLikelihood() weighs one.
+        // Each direction with its mirror, as logLikelihood() weighs one, by its weight.
         const double sigma = model.sigma(r.aoaDirectionStd);
         const double predicted = predictAoa(s, tx.pose.x, tx.pose.y);
-        const double share = std::min(0.5, model.aoaAlternativeShare * r.aoaAlternativeWeight);
-        ll += model.logOfInlierDensity(
-            (1 - share) *
-                model.inlierDensity(predicted, r.aoa, r.aoaAmbiguous, r.aoaMirror, sigma) +
-            share *
-                model.inlierDensity(
-                    predicted, r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r), sigma));
+        double density = 0;
+        for (const auto& d : aoaDirections(r, model.aoaAlternativeShare))
+            density +=
+                d.weight * model.inlierDensity(predicted, d.aoa, r.aoaAmbiguous, d.mirror, sigma);
+        ll += model.logOfInlierDensity(density);
     }
     else if (usesAoa(r, model, use))
         ll += model.logLikelihood(
@@ -65,9 +80,10 @@ std::optional<bool> recordAgrees(
     {
         const double predicted = predictAoa(s, tx.pose.x, tx.pose.y);
         const double sd = aoaStdUsed(r, model);
-        agrees = within(predicted, r.aoa, r.aoaAmbiguous, r.aoaMirror, sd) ||
-                 (usesAoaAlternative(r, model) &&
-                  within(predicted, r.aoaAlternative, r.aoaAmbiguous, aoaAlternativeMirror(r), sd));
+        agrees = false;
+        for (const auto& d :
+             aoaDirections(r, usesAoaAlternative(r, model) ? model.aoaAlternativeShare : 0.0))
+            agrees = *agrees || within(predicted, d.aoa, r.aoaAmbiguous, d.mirror, sd);
     }
     if (usesAod(r, model, use))
         agrees =

@@ -83,47 +83,113 @@ struct OdometryBiasPrior
     }
 };
 
+/** The robust loss a bearing block gets (makeLoss), for max-mixtures that must weigh their
+ *  components' penalties after it. */
+struct RobustLoss
+{
+    enum Kind
+    {
+        None,
+        Cauchy,
+        Huber
+    } kind = None;
+    double scale = 1;  //!< a, in units of σ
+
+    /** ρ(s) of a squared residual s, as Ceres's CauchyLoss / HuberLoss. */
+    template <typename T>
+    T apply(const T& s) const
+    {
+        using std::log, std::sqrt;
+        const double a2 = scale * scale;
+        if (kind == Cauchy) return T(a2) * log(T(1) + s / T(a2));
+        if (kind == Huber) return s <= T(a2) ? s : T(2 * scale) * sqrt(s) - T(a2);
+        return s;
+    }
+    /** The squared residual whose ρ is v. */
+    template <typename T>
+    T invert(const T& v) const
+    {
+        using std::exp;
+        const double a2 = scale * scale;
+        if (kind == Cauchy) return T(a2) * (exp(v / T(a2)) - T(1));
+        if (kind == Huber)
+        {
+            if (v <= T(a2)) return v;
+            const T root = (v + T(a2)) / T(2 * scale);
+            return root * root;
+        }
+        return v;
+    }
+};
+
 /** AoA at the robot: the transmitter (ap[0..1]) seen from the receive array, whose pose is the
- *  robot pose ⊕ a fixed offset (odometry since the node ⊕ sensor pose on the robot). With an
- *  alternative direction (and its mirror), the closest of all (a max-mixture). */
+ *  robot pose ⊕ a fixed offset (odometry since the node ⊕ sensor pose on the robot). With
+ *  alternative directions (each with its mirror), a weighted max-mixture (Olson & Agarwal):
+ *  the direction of least ρ((residual/σ)²) + 2·ln(w_max / w) counts, ρ the block's robust
+ *  loss, so a lighter direction explains a pose only when it fits that much better; the
+ *  penalty is added after the loss so that the loss, which caps what one bearing may cost,
+ *  does not cap the weights too. */
 struct AoaResidual
 {
+    static constexpr size_t kMaxDirections = 1 + 3;
     double ox, oy, oth, z, mirror, sigma;
     bool ambiguous;
-    bool hasAlternative = false;
-    double alternative = 0, alternativeMirror = 0;
+    size_t alternatives = 0;  //!< directions beyond z
+    double alternative[kMaxDirections - 1] = {}, alternativeMirror[kMaxDirections - 1] = {};
+    /** 2·ln(w_max / w) of z and of each alternative (0 for the heaviest). */
+    double penalty[kMaxDirections] = {};
+    RobustLoss loss;  //!< the loss Ceres applies to this block
 
     template <typename T>
     bool operator()(const T* pose, const T* ap, T* r) const
     {
-        using std::atan2, std::cos, std::sin;
+        using std::atan2, std::cos, std::sin, std::sqrt;
         const T c = cos(pose[2]), s = sin(pose[2]);
         const T sx = pose[0] + c * T(ox) - s * T(oy);
         const T sy = pose[1] + s * T(ox) + c * T(oy);
         const T pred = atan2(ap[1] - sy, ap[0] - sx) - pose[2] - T(oth);
-        r[0] = closestCandidate(pred, z, ambiguous, mirror);
-        if (hasAlternative)
+        T best = closestCandidate(pred, z, ambiguous, mirror) / T(sigma);
+        if (alternatives == 0)
         {
-            using std::abs;
-            const T other = closestCandidate(pred, alternative, ambiguous, alternativeMirror);
-            if (abs(other) < abs(r[0])) r[0] = other;
+            r[0] = best;
+            return true;
         }
-        r[0] /= T(sigma);
+        T bestCost = loss.apply(best * best) + T(penalty[0]);
+        size_t bestIndex = 0;
+        for (size_t i = 0; i < alternatives; ++i)
+        {
+            const T e =
+                closestCandidate(pred, alternative[i], ambiguous, alternativeMirror[i]) / T(sigma);
+            const T cost = loss.apply(e * e) + T(penalty[i + 1]);
+            if (cost < bestCost) best = e, bestCost = cost, bestIndex = i + 1;
+        }
+        // The heaviest direction keeps its signed residual; a lighter one the residual whose
+        // loss is its own plus its penalty.
+        r[0] = penalty[bestIndex] > 0 ? sqrt(loss.invert(bestCost)) : best;
         return true;
     }
 };
 
 /** `b`'s AoA residual seen from the offset (ox, oy, oth) with the given σ; `alternatives`:
- *  with b's alternative direction, when it has one (GraphSlamOptions::useAoaAlternatives). */
+ *  with b's alternative directions, weighed as the estimator measured them
+ *  (GraphSlamOptions::useAoaAlternatives). */
 inline AoaResidual aoaResidualOf(
-    const BearingRecord& b, double ox, double oy, double oth, double sigma, bool alternatives)
+    const BearingRecord& b, double ox, double oy, double oth, double sigma, bool alternatives,
+    const RobustLoss& loss = RobustLoss())
 {
     AoaResidual r{ox, oy, oth, b.aoa, b.aoaMirror, sigma, b.aoaAmbiguous};
-    if (alternatives && b.hasAoaAlternative)
+    r.loss = loss;
+    if (!alternatives || !b.hasAoaAlternative) return r;
+    const auto dirs = aoaDirections(b, 1.0);
+    double heaviest = 0;
+    for (const auto& d : dirs) heaviest = std::max(heaviest, d.weight);
+    for (size_t i = 0; i < dirs.size() && i < AoaResidual::kMaxDirections; ++i)
     {
-        r.hasAlternative = true;
-        r.alternative = b.aoaAlternative;
-        r.alternativeMirror = b.aoaAmbiguous ? aoaAlternativeMirror(b) : b.aoaAlternative;
+        r.penalty[i] = 2 * std::log(heaviest / std::max(dirs[i].weight, 1e-6));
+        if (i == 0) continue;
+        r.alternative[i - 1] = dirs[i].aoa;
+        r.alternativeMirror[i - 1] = dirs[i].mirror;
+        r.alternatives = i;
     }
     return r;
 }
@@ -162,6 +228,17 @@ struct PointAoaResidual
         return true;
     }
 };
+
+/** The RobustLoss of makeLoss(name, scale). */
+inline RobustLoss robustLossOf(const std::string& name, double scale)
+{
+    RobustLoss l;
+    l.kind = name == "cauchy"  ? RobustLoss::Cauchy
+             : name == "huber" ? RobustLoss::Huber
+                               : RobustLoss::None;
+    l.scale = scale;
+    return l;
+}
 
 /** The robust loss by name ("cauchy", "huber", "none"), scale in units of σ. */
 inline ceres::LossFunction* makeLoss(const std::string& name, double scale)

@@ -209,7 +209,9 @@ TrackResult solveBearingTrack(
             const auto& s = b.sensorPose;
             auto* r = new InterpolatedBearingResidual{
                 u.alpha,
-                detail::aoaResidualOf(b, s.x, s.y, s.phi, sigma, opt.useAoaAlternatives),
+                detail::aoaResidualOf(
+                    b, s.x, s.y, s.phi, sigma, opt.useAoaAlternatives,
+                    detail::robustLossOf(opt.loss, opt.lossScale)),
                 {s.x, s.y, b.aod, b.aodMirror, sigma, b.aodAmbiguous},
                 u.departure,
                 {u.tx->pose.x, u.tx->pose.y, u.tx->pose.phi}};

@@ -193,8 +193,8 @@ void CWiFiBearingMap::TLikelihoodOptions::loadFromConfigFile(
         throw std::invalid_argument("[" + s + "] min_std_deg and std_scale must be > 0");
     if (!(bearingWeight > 0 && bearingWeight <= 1))
         throw std::invalid_argument("[" + s + "] bearing_weight must be in (0, 1]");
-    if (!(model.aoaAlternativeShare >= 0 && model.aoaAlternativeShare <= 0.5))
-        throw std::invalid_argument("[" + s + "] aoa_alternative_share must be in [0, 0.5]");
+    if (!(model.aoaAlternativeShare >= 0 && model.aoaAlternativeShare <= 1))
+        throw std::invalid_argument("[" + s + "] aoa_alternative_share must be in [0, 1]");
     // A filter on such a map runs without error and never moves from its prior.
     if (!use.aoa && !use.aod)
         throw std::invalid_argument(
@@ -370,10 +370,10 @@ void CWiFiBearingMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t v
                     std::to_string(likelihoodOptions.bearingWeight) + " is outside (0, 1]");
             m.aoaAlternativeShare = 0;
             if (version >= 3) in >> m.aoaAlternativeShare;
-            if (!(m.aoaAlternativeShare >= 0 && m.aoaAlternativeShare <= 0.5))
+            if (!(m.aoaAlternativeShare >= 0 && m.aoaAlternativeShare <= 1))
                 throw std::runtime_error(
                     "serialized CWiFiBearingMap: AoA alternative share " +
-                    std::to_string(m.aoaAlternativeShare) + " is outside [0, 0.5]");
+                    std::to_string(m.aoaAlternativeShare) + " is outside [0, 1]");
         }
         break;
         default:

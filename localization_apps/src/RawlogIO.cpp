@@ -25,6 +25,9 @@ BearingRecord recordFromObservation(const CObservationWiFiBearing& o)
     r.hasAoaAlternative = o.hasAoaAlternative;
     r.aoaAlternative = o.aoaAlternative_rad, r.aoaAlternativeWeight = o.aoaAlternativeWeight;
     r.aoaDirectionStd = o.hasAoaAlternative ? o.aoaDirectionStd_rad : o.aoaStd_rad;
+    if (o.hasAoaAlternative)
+        for (const auto& a : o.moreAoaAlternatives)
+            r.moreAoaAlternatives.push_back({a.aoa_rad, a.weight});
     r.hasAod = o.hasAod;
     r.aod = o.aod_rad, r.aodStd = o.aodStd_rad;
     r.aodAmbiguous = o.aodAmbiguous, r.aodMirror = o.aodMirror_rad;
@@ -49,6 +52,9 @@ CObservationWiFiBearing::Ptr observationFromRecord(const BearingRecord& r, const
     o->hasAoaAlternative = r.hasAoa && r.hasAoaAlternative;
     o->aoaAlternative_rad = r.aoaAlternative, o->aoaAlternativeWeight = r.aoaAlternativeWeight;
     o->aoaDirectionStd_rad = o->hasAoaAlternative ? r.aoaDirectionStd : o->aoaStd_rad;
+    if (o->hasAoaAlternative)
+        for (const auto& a : r.moreAoaAlternatives)
+            o->moreAoaAlternatives.push_back({a.aoa, a.weight});
     o->hasAod = r.hasAod;
     o->aod_rad = r.aod, o->aodStd_rad = r.aodStd;
     o->aodAmbiguous = r.aodAmbiguous, o->aodMirror_rad = r.aodMirror;

@@ -195,8 +195,9 @@ double WindowSmoother::recentAoaResidual(
                                   : r;
         };
         double r = residual(b.aoa, b.aoaMirror);
-        if (opts_.graph.useAoaAlternatives && b.hasAoaAlternative)
-            r = std::min(r, residual(b.aoaAlternative, aoaAlternativeMirror(b)));
+        if (opts_.graph.useAoaAlternatives)
+            for (const auto& a : b.aoaAlternatives())
+                r = std::min(r, residual(a.aoa, aoaMirrorOf(b, a.aoa)));
         residuals.push_back(r);
     }
     return detail::median(std::move(residuals));  // 0: nothing recent to check against

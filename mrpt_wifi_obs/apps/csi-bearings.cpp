@@ -169,6 +169,18 @@ int main(int argc, char** argv)
                 "estimator): a window's bearing near one endfire that the transmitter's track "
                 "puts at the other is replaced by that one",
                 false, "", "on|off", cmd);
+            TCLAP::ValueArg<std::string> argStateVerification(
+                "", "state-verification",
+                "Receive-chain jump states learnt online keep being checked against the other "
+                "chains: refined, confirmed, or dropped and learnt again; until confirmed their "
+                "bearings' sigma covers the doubt (on/off; default: on)",
+                false, "on", "on|off", cmd);
+            TCLAP::ValueArg<std::string> argSaveLearntStates(
+                "", "save-learnt-states",
+                "Write the receive calibration with the jump states learnt (and confirmed) "
+                "during this run added, as DIR/<device>/ch<C>_<BW>mhz.yaml: with --calib DIR "
+                "the next run knows them",
+                false, "", "DIR", cmd);
             TCLAP::ValueArg<std::string> argCsv(
                 "", "csv", "Also write the bearings as CSV", false, "", "FILE", cmd);
             TCLAP::ValueArg<std::string> argImages(
@@ -225,6 +237,16 @@ int main(int argc, char** argv)
                     throw std::invalid_argument("--tracking: 'on' or 'off', not '" + t + "'");
                 cfg.window.tracking = t == "on";
             }
+            {
+                const std::string& v = argStateVerification.getValue();
+                if (v != "on" && v != "off")
+                    throw std::invalid_argument(
+                        "--state-verification: 'on' or 'off', not '" + v + "'");
+                pre.chainStates.verify = v == "on";
+            }
+            if (argSaveLearntStates.isSet() && !argCalib.isSet())
+                throw std::invalid_argument(
+                    "--save-learnt-states needs --calib (the calibration the states are added to)");
             CsiPreprocessor preprocessor(pre, rxArray, calib);
 
             bearing::BearingProcessor processor(
@@ -289,7 +311,8 @@ int main(int argc, char** argv)
                 if (!csv) throw std::runtime_error("cannot create '" + argCsv.getValue() + "'");
                 csv << "timestamp,transmitter,channel,rssi_dbm,algorithm,aoa_deg,aoa_std_deg,"
                        "aoa_ambiguous,aoa_mirror_deg,has_aod,aod_deg,aod_std_deg,aod_mirror_deg,"
-                       "delay_ns,quality,frames,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg\n";
+                       "delay_ns,quality,frames,aoa_alt_deg,aoa_alt_weight,aoa_direction_std_deg,"
+                       "aoa_more_alts\n";
                 csv << std::fixed;
             }
             if (argImages.isSet()) fs::create_directories(argImages.getValue());
@@ -364,7 +387,13 @@ int main(int argc, char** argv)
                         << b->delay_s * 1e9 << "," << b->quality << "," << b->framesUsed << ","
                         << deg(b->hasAoaAlternative, b->aoaAlternative_rad) << ","
                         << (b->hasAoaAlternative ? std::to_string(b->aoaAlternativeWeight) : "")
-                        << "," << deg(b->hasAoaAlternative, b->aoaDirectionStd_rad) << "\n";
+                        << "," << deg(b->hasAoaAlternative, b->aoaDirectionStd_rad) << ",";
+                    // The second and later alternatives: "deg:weight;deg:weight".
+                    for (size_t i = 0; b->hasAoaAlternative && i < b->moreAoaAlternatives.size();
+                         ++i)
+                        csv << (i ? ";" : "") << deg(true, b->moreAoaAlternatives[i].aoa_rad) << ":"
+                            << std::setprecision(4) << b->moreAoaAlternatives[i].weight;
+                    csv << "\n";
                 }
                 const bool picture =
                     (argImages.isSet() || argRawlogImages.getValue()) &&
@@ -511,6 +540,22 @@ int main(int argc, char** argv)
                 for (const auto* t : trackers) std::cout << t->summary();
             }
             for (const auto& n : chainStateNotices) std::cerr << "warning: " << n << "\n";
+            if (argSaveLearntStates.isSet())
+            {
+                const auto learnt = processor.preprocessor().calibrationsWithLearntStates();
+                if (learnt.empty())
+                    std::cout << "Learnt states: none confirmed; nothing written to "
+                              << argSaveLearntStates.getValue() << "\n";
+                for (const auto& c : learnt)
+                {
+                    const std::string path = PhaseCalibration::pathFor(
+                        argSaveLearntStates.getValue(), c.device, c.chanspec);
+                    fs::create_directories(fs::path(path).parent_path());
+                    c.saveYamlFile(path);
+                    std::cout << "Learnt states: " << path << " (" << c.chainStates.size()
+                              << " states)\n";
+                }
+            }
             if (argImages.isSet())
                 std::cout << "Images: " << imagesTotal << " PNG files in " << argImages.getValue()
                           << "\n";

@@ -3,6 +3,7 @@
 #include <mrpt_wifi/obs/BoundedArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -17,6 +18,9 @@ double deg(double r)
 {
     return r * 180.0 / M_PI;
 }
+/** Bound on the alternatives a stored observation may hold beyond the first (corrupt input
+ *  must not allocate without limit). */
+constexpr size_t kMaxStoredAlternatives = 15;
 }  // namespace
 
 int32_t CObservationWiFiBearing::landmarkIdOf(const MacAddress& mac)
@@ -31,7 +35,17 @@ int32_t CObservationWiFiBearing::mirrorLandmarkIdOf(const MacAddress& mac)
 
 uint8_t CObservationWiFiBearing::serializeGetVersion() const
 {
-    return 1;
+    return 2;
+}
+
+std::vector<CObservationWiFiBearing::AoaAlternative> CObservationWiFiBearing::aoaAlternatives()
+    const
+{
+    std::vector<AoaAlternative> all;
+    if (!hasAoaAlternative) return all;
+    all.push_back({aoaAlternative_rad, aoaAlternativeWeight});
+    all.insert(all.end(), moreAoaAlternatives.begin(), moreAoaAlternatives.end());
+    return all;
 }
 
 void CObservationWiFiBearing::serializeTo(mrpt::serialization::CArchive& out) const
@@ -43,6 +57,10 @@ void CObservationWiFiBearing::serializeTo(mrpt::serialization::CArchive& out) co
     out << hasAod << aod_rad << aodStd_rad << aodAmbiguous << aodMirror_rad;
     out << hasDelay << delay_s << quality;
     out << hasAoaAlternative << aoaAlternative_rad << aoaAlternativeWeight << aoaDirectionStd_rad;
+    const auto& more = hasAoaAlternative ? moreAoaAlternatives : std::vector<AoaAlternative>();
+    out << uint8_t(std::min<size_t>(more.size(), kMaxStoredAlternatives));
+    for (size_t i = 0; i < more.size() && i < kMaxStoredAlternatives; ++i)
+        out << more[i].aoa_rad << more[i].weight;
 }
 
 void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -51,6 +69,7 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
     {
         case 0:
         case 1:
+        case 2:
         {
             constexpr const char* kWhat = "CObservationWiFiBearing";
             in >> timestamp;
@@ -76,6 +95,26 @@ void CObservationWiFiBearing::serializeFrom(mrpt::serialization::CArchive& in, u
             else
                 hasAoaAlternative = false, aoaAlternative_rad = 0, aoaAlternativeWeight = 0,
                 aoaDirectionStd_rad = aoaStd_rad;
+            moreAoaAlternatives.clear();
+            if (version >= 2)
+            {
+                uint8_t n = 0;
+                in >> n;
+                if (n > kMaxStoredAlternatives || (n > 0 && !hasAoaAlternative))
+                    THROW_EXCEPTION_FMT(
+                        "CObservationWiFiBearing: %u more AoA alternatives stored (at most %u, "
+                        "and only after a first one)",
+                        unsigned(n), unsigned(kMaxStoredAlternatives));
+                moreAoaAlternatives.resize(n);
+                for (auto& a : moreAoaAlternatives)
+                {
+                    in >> a.aoa_rad >> a.weight;
+                    if (!std::isfinite(a.aoa_rad) || !(a.weight >= 0 && a.weight <= 1))
+                        THROW_EXCEPTION(
+                            "CObservationWiFiBearing: a stored AoA alternative has a non-finite "
+                            "angle or a weight outside [0, 1]");
+                }
+            }
         }
         break;
         default:
@@ -99,9 +138,13 @@ void CObservationWiFiBearing::getDescriptionAsText(std::ostream& o) const
         o << "  AoA mirror      : " << deg(aoaMirror_rad)
           << " deg  (linear array: equally consistent, not resolved)\n";
     if (hasAoaAlternative)
-        o << "  AoA alternative : " << deg(aoaAlternative_rad) << " deg  (weight "
-          << aoaAlternativeWeight << " of the chosen one's; sigma of each direction "
-          << deg(aoaDirectionStd_rad) << " deg)\n";
+    {
+        for (const auto& a : aoaAlternatives())
+            o << "  AoA alternative : " << deg(a.aoa_rad) << " deg  (weight " << a.weight
+              << ": probability it, not the AoA, is the transmitter's)\n";
+        o << "  AoA direction sigma: " << deg(aoaDirectionStd_rad)
+          << " deg (each direction's, given it is the right one)\n";
+    }
     if (hasAod)
     {
         o << "  AoD             : " << deg(aod_rad) << " deg  (sigma " << deg(aodStd_rad)
@@ -119,7 +162,9 @@ std::string CObservationWiFiBearing::exportTxtHeader() const
 {
     return "%  MAC_HI24 MAC_LO24 CHANNEL BW_MHZ RSSI_DBM AOA_RAD AOA_STD_RAD AOA_AMBIGUOUS "
            "AOA_MIRROR_RAD HAS_AOD AOD_RAD AOD_STD_RAD AOD_MIRROR_RAD DELAY_S QUALITY FRAMES "
-           "HAS_AOA_ALT AOA_ALT_RAD AOA_ALT_WEIGHT AOA_DIRECTION_STD_RAD";
+           "HAS_AOA_ALT AOA_ALT_RAD AOA_ALT_WEIGHT AOA_DIRECTION_STD_RAD AOA_ALT2_RAD "
+           "AOA_ALT2_WEIGHT "
+           "AOA_ALT3_RAD AOA_ALT3_WEIGHT";
 }
 
 std::string CObservationWiFiBearing::exportTxtDataRow() const
@@ -133,6 +178,13 @@ std::string CObservationWiFiBearing::exportTxtDataRow() const
       << aodStd_rad << " " << aodMirror_rad << " " << (hasDelay ? delay_s : 0.0) << " " << quality
       << " " << framesUsed << " " << int(hasAoaAlternative) << " " << aoaAlternative_rad << " "
       << aoaAlternativeWeight << " " << aoaDirectionStd_rad;
+    // Fixed columns: the second and third alternatives (0 0 when absent).
+    for (size_t i = 0; i < 2; ++i)
+    {
+        const bool has = hasAoaAlternative && i < moreAoaAlternatives.size();
+        o << " " << (has ? moreAoaAlternatives[i].aoa_rad : 0.0) << " "
+          << (has ? moreAoaAlternatives[i].weight : 0.0);
+    }
     return o.str();
 }
 

@@ -187,6 +187,7 @@ ChainStateTracker::ChainStateTracker(unsigned nRx, const PhaseCalibration* cal, 
         s.deltaDelay_s = st.deltaDelay_s;
         s.deltaPhase_rad = st.deltaPhase_rad;
         s.origin = ChainStateOrigin::Calibration;
+        s.confirmed = true;
         states_[st.antenna].push_back(s);
     }
     for (unsigned i = 0; i < nRx; ++i)
@@ -230,6 +231,7 @@ ChainStateInfo& ChainStateTracker::newState(unsigned chain, double delay_s, Chai
     s.id = std::min<uint8_t>(id, kUnknownChainState - 1);
     s.delay_s = delay_s;
     s.origin = origin;
+    s.confirmed = origin == ChainStateOrigin::Assumed;
     if (const ChainStateInfo* ref = reference(chain)) s.deltaDelay_s = delay_s - ref->delay_s;
     list.push_back(s);
     // The filter moves to the new state: the frames that found it were in it.
@@ -384,13 +386,118 @@ bool ChainStateTracker::addLearningEvidence(unsigned chain, uint8_t id, std::com
     }
     s->deltaPhase_rad = std::arg(std::polar(1.0, s->deltaPhase_rad) * s->evidence);
     s->origin = ChainStateOrigin::LearntOnline;
+    // Verification starts from the learning frames' evidence; unconfirmed until later blocks
+    // agree with it.
+    s->verified = std::polar(std::abs(s->evidence), s->deltaPhase_rad);
+    s->block = {0, 0};
+    s->blockWeight = 0;
+    s->blockFrames = 0;
+    s->agreeingBlocks = s->disagreeingBlocks = 0;
+    s->heldBack = {0, 0};
+    s->confirmed = false;
+    s->phaseDoubt_rad = opts_.learntPhaseDoubt_rad;
     std::ostringstream o;
     o.precision(2);
     o << std::fixed << "chain " << chain << ": jump state " << int(id) << " (" << ns(s->delay_s)
       << ") learnt online from " << s->evidenceFrames << " frames (coherence " << coherence
-      << ", phase " << s->deltaPhase_rad * 180 / M_PI << " deg)";
+      << ", phase " << s->deltaPhase_rad * 180 / M_PI << " deg)" << (s->relearnt ? " again" : "")
+      << "; unconfirmed until later frames agree";
     notices_.push_back(o.str());
     return true;
+}
+
+bool ChainStateTracker::addVerificationEvidence(
+    unsigned chain, uint8_t id, std::complex<double> z, double weight)
+{
+    ChainStateInfo* s = nullptr;
+    for (auto& e : states_.at(chain))
+        if (e.id == id) s = &e;
+    if (!opts_.verify || !s || s->origin != ChainStateOrigin::LearntOnline || !(std::abs(z) > 0) ||
+        !(weight > 0))
+        return false;
+    // z is the residual after the current correction: the absolute phase is deltaPhase + arg z.
+    s->block += weight * std::polar(1.0, s->deltaPhase_rad) * z / std::abs(z);
+    s->blockWeight += weight;
+    if (++s->blockFrames < opts_.verifyFrames) return false;
+    const double coherence = std::abs(s->block) / s->blockWeight;
+    const double disagreement =
+        std::abs(std::arg(s->block * std::conj(std::polar(1.0, s->deltaPhase_rad))));
+    const std::complex<double> block = s->block;
+    s->block = {0, 0};
+    s->blockWeight = 0;
+    s->blockFrames = 0;
+    if (coherence < opts_.learnCoherence) return false;  // inconclusive (multipath, noise)
+    std::ostringstream o;
+    o.precision(1);
+    o << std::fixed << "chain " << chain << ": jump state " << int(id) << " (" << ns(s->delay_s)
+      << ")";
+    const double before = s->deltaPhase_rad;
+    if (disagreement > opts_.disagreement_rad)
+    {
+        // Held back: one block may be an outlier (frames of another state, a reflection).
+        s->agreeingBlocks = 0;
+        s->heldBack += block;
+        if (!s->confirmed) s->phaseDoubt_rad = std::max(s->phaseDoubt_rad, disagreement);
+        if (++s->disagreeingBlocks < opts_.dropBlocks) return false;
+        // The learnt phase no longer explains its frames: dropped, learnt again from the
+        // blocks that disagree with it; unconfirmed until later ones agree.
+        o << ": " << s->disagreeingBlocks << " blocks of later frames disagree with its phase by "
+          << disagreement * 180 / M_PI << " deg; dropped and learnt again ("
+          << std::arg(s->heldBack) * 180 / M_PI << " deg), unconfirmed";
+        notices_.push_back(o.str());
+        s->verified = s->heldBack;
+        s->heldBack = {0, 0};
+        s->deltaPhase_rad = std::arg(s->verified);
+        s->disagreeingBlocks = 0;
+        s->confirmed = false;
+        s->phaseDoubt_rad = opts_.learntPhaseDoubt_rad;
+        ++s->relearnt;
+        return true;
+    }
+    s->disagreeingBlocks = 0;
+    s->heldBack = {0, 0};
+    const bool agrees = disagreement <= opts_.agreement_rad;
+    if (agrees) ++s->agreeingBlocks;
+    // Every coherent block that does not contradict it refines the phase: each stretch of the
+    // drive has its own multipath bias, their sum less of it.
+    s->verified += block;
+    s->deltaPhase_rad = std::arg(s->verified);
+    if (!s->confirmed)
+    {
+        if (s->agreeingBlocks >= opts_.confirmBlocks)
+        {
+            s->confirmed = true;
+            s->phaseDoubt_rad = 0;
+            o << " confirmed by " << s->agreeingBlocks << " blocks of " << opts_.verifyFrames
+              << " frames (phase " << s->deltaPhase_rad * 180 / M_PI << " deg)";
+            notices_.push_back(o.str());
+        }
+        else if (agrees)
+            s->phaseDoubt_rad = std::max(opts_.agreement_rad, 0.5 * s->phaseDoubt_rad);
+        else
+            s->phaseDoubt_rad = std::max(s->phaseDoubt_rad, disagreement);
+    }
+    return s->deltaPhase_rad != before;
+}
+
+std::vector<ChainStateCalibration> ChainStateTracker::learntStates(bool confirmedOnly) const
+{
+    std::vector<ChainStateCalibration> out;
+    for (unsigned i = 1; i < chains(); ++i)
+        for (const auto& s : states_[i])
+        {
+            if (s.origin != ChainStateOrigin::LearntOnline || (confirmedOnly && !s.confirmed))
+                continue;
+            ChainStateCalibration c;
+            c.antenna = i;
+            c.state = s.id;
+            c.delay_s = s.delay_s;
+            c.deltaDelay_s = s.deltaDelay_s;
+            c.deltaPhase_rad = s.deltaPhase_rad;
+            c.frames = s.frames;
+            out.push_back(c);
+        }
+    return out;
 }
 
 std::vector<std::string> ChainStateTracker::takeNotices()
@@ -408,7 +515,12 @@ std::string ChainStateTracker::summary() const
         o << "  chain " << i << ": " << changes_[i] << " state changes;";
         for (const auto& s : states_[i])
             o << " state " << int(s.id) << " " << ns(s.delay_s) << " " << s.frames << " frames ("
-              << toString(s.origin) << ");";
+              << toString(s.origin)
+              << (s.origin == ChainStateOrigin::LearntOnline
+                      ? std::string(s.confirmed ? ", confirmed" : ", unconfirmed")
+                      : std::string())
+              << (s.relearnt ? ", relearnt " + std::to_string(s.relearnt) + "x" : std::string())
+              << ");";
         o << "\n";
     }
     return o.str();

@@ -553,7 +553,139 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
         learnChainState(cache, out, unsigned(learning));
         return RejectReason::UnknownChainState;
     }
+    out.stateDoubt_rad = 0;
+    if (options_.trackChainStates && options_.chainStates.verify && cache.states.applies())
+        verifyChainStates(cache, out);
     return RejectReason::Accepted;
+}
+
+namespace
+{
+/** Wideband Bartlett power of the chains in `use` at bearing θ from sub-band covariances:
+ *  Σ_g a_g^H R_g a_g, a = the chains' steering at the sub-band's centre frequency. The
+ *  array is 7.8 cm wide, so across a 20 MHz sub-band its steering moves by < 0.03 rad. */
+struct SubbandBartlett
+{
+    const AntennaArray* array = nullptr;
+    const std::vector<Eigen::MatrixXcd>* R = nullptr;
+    std::vector<double> centre_Hz;
+
+    std::complex<double> steer(unsigned i, double theta, size_t g) const
+    {
+        return std::polar(
+            1.0, 2 * M_PI * array->projection(i, theta) * centre_Hz[g] / kSpeedOfLightMps);
+    }
+    /** Σ_g Σ_{k,l ∈ use} conj(a_k) R_g(k,l) a_l, chain `turned` rotated by e^{jδ}. */
+    double power(double theta, unsigned nRx, int excluded, int turned = -1, double delta = 0) const
+    {
+        double p = 0;
+        std::complex<double> a[CObservationWiFiCSI::kMaxChains];
+        for (size_t g = 0; g < R->size(); ++g)
+        {
+            for (unsigned k = 0; k < nRx; ++k)
+                a[k] = int(k) == excluded ? 0.0
+                                          : steer(k, theta, g) *
+                                                (int(k) == turned ? std::polar(1.0, -delta) : 1.0);
+            const auto& Rg = (*R)[g];
+            for (unsigned k = 0; k < nRx; ++k)
+                for (unsigned l = 0; l < nRx; ++l)
+                    p += std::real(std::conj(a[k]) * Rg(k, l) * a[l]);
+        }
+        return p;
+    }
+    double best(unsigned nRx, int excluded, int turned = -1, double delta = 0) const
+    {
+        const auto [lo, hi] = array->searchInterval();
+        double theta = lo, top = -1;
+        for (double t = lo; t <= hi; t += M_PI / 180)
+            if (const double p = power(t, nRx, excluded, turned, delta); p > top)
+                top = p, theta = t;
+        const double coarse = theta;
+        for (double t = coarse - M_PI / 180; t <= coarse + M_PI / 180; t += M_PI / 1800)
+            if (const double p = power(t, nRx, excluded, turned, delta); p > top)
+                top = p, theta = t;
+        return theta;
+    }
+    /** Chain i's residual phasor against the others' steered sum at θ, per sub-band summed;
+     *  `coherence`: how well the sub-bands agree (|Σ| / Σ|·|). */
+    std::complex<double> residual(unsigned i, double theta, unsigned nRx, double& coherence) const
+    {
+        std::complex<double> z{0, 0};
+        double magnitude = 0;
+        for (size_t g = 0; g < R->size(); ++g)
+        {
+            std::complex<double> zg{0, 0};
+            for (unsigned k = 0; k < nRx; ++k)
+                if (k != i)
+                    zg += std::conj(steer(i, theta, g)) * steer(k, theta, g) * (*R)[g](i, k);
+            z += zg;
+            magnitude += std::abs(zg);
+        }
+        coherence = magnitude > 0 ? std::abs(z) / magnitude : 0.0;
+        return z;
+    }
+};
+}  // namespace
+
+void CsiPreprocessor::verifyChainStates(ChannelCache& cache, CleanCsi& f)
+{
+    const unsigned nRx = f.nRx;
+    bool anyLearnt = false;
+    for (unsigned i = 1; i < nRx; ++i)
+        anyLearnt = anyLearnt ||
+                    cache.states.info(i, f.chainState[i]).origin == ChainStateOrigin::LearntOnline;
+    if (!anyLearnt) return;
+    constexpr unsigned kGroups = 4;
+    SubbandBartlett b;
+    b.array = &rxArray_;
+    b.R = &f.groupCovariances(kGroups);
+    for (unsigned g = 0; g < kGroups; ++g)
+    {
+        const auto [lo, hi] = CleanCsi::groupRange(f.layout->size(), kGroups, g);
+        double sum = 0;
+        for (size_t j = lo; j < hi; ++j) sum += f.layout->frequencies_Hz[j];
+        b.centre_Hz.push_back(hi > lo ? sum / double(hi - lo) : f.layout->centerFrequency_Hz);
+    }
+    double theta0 = NAN;
+    const ChainStateOptions& opts = cache.states.options();
+    for (unsigned i = 1; i < nRx; ++i)
+    {
+        const ChainStateInfo& st = cache.states.info(i, f.chainState[i]);
+        if (st.origin != ChainStateOrigin::LearntOnline) continue;
+        // Checked only against chains whose own states are beyond doubt.
+        bool othersSure = true;
+        for (unsigned k = 1; k < nRx; ++k)
+            if (k != i) othersSure = othersSure && cache.states.info(k, f.chainState[k]).confirmed;
+        if (othersSure)
+        {
+            double coherence = 0;
+            const std::complex<double> z = b.residual(i, b.best(nRx, int(i)), nRx, coherence);
+            cache.states.addVerificationEvidence(i, f.chainState[i], z, coherence * coherence);
+            // This frame's own assignment: a clear residual beyond what the state's frames
+            // scatter by says it may be in another state (the delay classifier lags a switch
+            // and multipath moves a delay): the bearing may be off by what correcting the
+            // residual would move it.
+            const double residual = std::arg(z);
+            if (coherence >= opts.learnCoherence && std::abs(residual) > opts.disagreement_rad)
+            {
+                if (std::isnan(theta0)) theta0 = b.best(nRx, -1);
+                const double corrected = b.best(nRx, -1, int(i), -residual);
+                f.stateDoubt_rad = std::max(
+                    f.stateDoubt_rad, std::abs(std::remainder(corrected - theta0, 2 * M_PI)));
+            }
+        }
+        const ChainStateInfo& now = cache.states.info(i, f.chainState[i]);
+        if (now.confirmed || !(now.phaseDoubt_rad > 0)) continue;
+        // The doubt as a bearing: how far the whole array's peak moves when this chain's phase
+        // is off by the doubt either way.
+        if (std::isnan(theta0)) theta0 = b.best(nRx, -1);
+        for (const double sign : {-1.0, 1.0})
+        {
+            const double shifted = b.best(nRx, -1, int(i), sign * now.phaseDoubt_rad);
+            f.stateDoubt_rad =
+                std::max(f.stateDoubt_rad, std::abs(std::remainder(shifted - theta0, 2 * M_PI)));
+        }
+    }
 }
 
 void CsiPreprocessor::learnChainState(ChannelCache& cache, const CleanCsi& f, unsigned chain)
@@ -629,6 +761,22 @@ uint64_t CsiPreprocessor::chainStateChanges() const
     uint64_t n = 0;
     for (const auto& [key, c] : caches_) n += c.states.totalChanges();
     return n;
+}
+
+std::vector<PhaseCalibration> CsiPreprocessor::calibrationsWithLearntStates(
+    bool confirmedOnly) const
+{
+    std::vector<PhaseCalibration> out;
+    for (const auto& [key, c] : caches_)
+    {
+        if (!c.calibration || !c.states.applies()) continue;
+        auto learnt = c.states.learntStates(confirmedOnly);
+        if (learnt.empty()) continue;
+        PhaseCalibration cal = *c.calibration;
+        for (auto& st : learnt) cal.chainStates.push_back(st);
+        out.push_back(std::move(cal));
+    }
+    return out;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -225,6 +225,71 @@ TEST(BearingMapLikelihood, AnAlternativeDirectionIsWeighedAsAMixture)
     EXPECT_DOUBLE_EQ(withShare, map.computeObservationLikelihood(*sure, offPose));
 }
 
+TEST(BearingMapLikelihood, WeighedAlternativesKeepTheTruthAgainstReflections)
+{
+    // Issue 53 (room 2): three APs' strongest paths are reflections that all fit one wrong
+    // pose better than the truth (the filter converged there: log-likelihood 1939 against 1804
+    // at the truth). Each bearing carries two alternatives, as the estimators measure them: a
+    // second reflection that fits nothing (weight 0.4) and the direct path (0.35). Weighed as a
+    // mixture of all of them, the truth is the most likely pose; with one direction per bearing,
+    // or the first alternative only, the wrong pose wins.
+    CWiFiBearingMap map;
+    map.setTransmitters(
+        makeAps({{0.3, 7.7, -0.785}, {9.7, 7.7, -2.36}, {9.7, 0.3, 2.36}, {0.3, 0.3, 0.785}}));
+    map.likelihoodOptions.use.aod = false;
+    const mrpt::math::TPose2D truth(4, 3, 0.3), wrong(4, 4.2, 0.3);
+    std::vector<BearingRecord> records;
+    for (size_t i = 0; i < 4; ++i)
+    {
+        const auto& ap = map.transmitters().at(i);
+        BearingRecord r = exactAoa(ap, truth, mrpt::DEG2RAD(2.0));
+        if (i < 3)
+        {
+            r.hasAoaAlternative = true;
+            r.aoaAlternative = wrapToPi(r.aoa + mrpt::DEG2RAD(70.0));
+            r.aoaAlternativeWeight = 0.4;
+            r.moreAoaAlternatives = {{r.aoa, 0.35}};
+            r.aoaDirectionStd = r.aoaStd;
+            r.aoa = exactAoa(ap, wrong, r.aoaStd).aoa;  // the reflection, reported
+        }
+        records.push_back(r);
+    }
+    const auto logLikelihood = [&](const std::vector<BearingRecord>& rs, double x, double y)
+    {
+        double ll = 0;
+        for (const auto& r : rs)
+            ll += map.computeObservationLikelihood(
+                *observationFromRecord(r), mrpt::poses::CPose3D(x, y, 0, truth.phi, 0, 0));
+        return ll;
+    };
+    const auto bestPosition = [&](const std::vector<BearingRecord>& rs)
+    {
+        double best = -INFINITY;
+        mrpt::math::TPoint2D at;
+        for (double x = 0.5; x < 9.5; x += 0.05)
+            for (double y = 0.5; y < 7.5; y += 0.05)
+                if (const double ll = logLikelihood(rs, x, y); ll > best) best = ll, at = {x, y};
+        return at;
+    };
+    const auto fromTruth = [&](const mrpt::math::TPoint2D& a)
+    { return std::hypot(a.x - truth.x, a.y - truth.y); };
+    auto firstOnly = records;
+    for (auto& r : firstOnly) r.moreAoaAlternatives.clear();
+
+    map.likelihoodOptions.model.aoaAlternativeShare = 0;
+    EXPECT_GT(logLikelihood(records, wrong.x, wrong.y), logLikelihood(records, truth.x, truth.y))
+        << "one direction each: the reflections win";
+    map.likelihoodOptions.model.aoaAlternativeShare = 1;
+    EXPECT_GT(
+        logLikelihood(firstOnly, wrong.x, wrong.y), logLikelihood(firstOnly, truth.x, truth.y))
+        << "the first alternative only: the reflections win";
+    EXPECT_GT(logLikelihood(records, truth.x, truth.y), logLikelihood(records, wrong.x, wrong.y))
+        << "the mixture of all alternatives keeps the truth";
+    const auto mixture = bestPosition(records);
+    EXPECT_LT(fromTruth(mixture), 0.15)
+        << "its most likely pose: " << mixture.x << ", " << mixture.y;
+}
+
 TEST(BearingMapLikelihood, ZeroForOtherObservationsAndUnknownTransmitters)
 {
     CWiFiBearingMap map;

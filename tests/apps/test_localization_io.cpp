@@ -126,6 +126,39 @@ TEST(LocalizationCsv, ReadsTheAoaAlternative)
     EXPECT_FALSE(back[1].hasAoaAlternative);
 }
 
+TEST(LocalizationCsv, ReadsSeveralAoaAlternatives)
+{
+    // aoa_more_alts: the second and later alternatives, "deg:weight;deg:weight".
+    const std::string header =
+        "timestamp,transmitter,aoa_deg,aoa_std_deg,aoa_alt_deg,aoa_alt_weight,"
+        "aoa_direction_std_deg,aoa_more_alts\n";
+    const auto r = readBearingCsv(
+        writeTemp(header + "1700000000.1,02:00:00:00:03:02,20,3,-35,0.3,3,60:0.05;-70:0.02\n"), {});
+    ASSERT_EQ(r.size(), 1u);
+    const auto all = r[0].aoaAlternatives();
+    ASSERT_EQ(all.size(), 3u);
+    EXPECT_NEAR(all[1].aoa, mrpt::DEG2RAD(60.0), 1e-12);
+    EXPECT_DOUBLE_EQ(all[2].weight, 0.02);
+    const auto path = mrpt_wifi::test::tempPath();
+    writeBearingCsv(path, r);
+    const auto back = readBearingCsv(path, {});
+    ASSERT_EQ(back.size(), 1u);
+    ASSERT_EQ(back[0].aoaAlternatives().size(), 3u);
+    EXPECT_NEAR(back[0].aoaAlternatives()[2].aoa, mrpt::DEG2RAD(-70.0), 1e-4);
+    for (const std::string bad : {"60:0.05;-70", "60:2", "x:0.1"}) try
+        {
+            readBearingCsv(
+                writeTemp(header + "1700000000.1,02:00:00:00:03:02,20,3,-35,0.3,3," + bad + "\n"),
+                {});
+            ADD_FAILURE() << "accepted '" << bad << "'";
+        }
+        catch (const std::runtime_error& e)
+        {
+            EXPECT_NE(std::string(e.what()).find(":2: aoa_more_alts"), std::string::npos)
+                << e.what();
+        }
+}
+
 TEST(LocalizationCsv, ErrorsNameTheLine)
 {
     BearingCsvOptions o;

@@ -290,7 +290,7 @@ TEST(BearingTrack, WeighsBothDirectionsOfAWindowThatCannotTell)
         {
             b.hasAoaAlternative = true;
             b.aoaAlternative = b.aoa - std::copysign(M_PI / 2, b.aoa);
-            b.aoaAlternativeWeight = 1;
+            b.aoaAlternativeWeight = 0.5;  // as likely as the reported one
             b.aoaDirectionStd = b.aoaStd;
             b.aoaStd = 70 * M_PI / 180;
         }
@@ -313,6 +313,55 @@ TEST(BearingTrack, WeighsBothDirectionsOfAWindowThatCannotTell)
     // Four sure APs: 0.09 m; one AP alone: 7 m.
     EXPECT_LT(both, 0.12) << "as with four sure APs";
     EXPECT_GT(wide, 1.5 * both) << "one AP's bearings and three 70° ones: wide " << wide;
+}
+
+TEST(BearingTrack, WeighedAlternativesKeepTheTruthAgainstReflections)
+{
+    // Issue 53 (room 2): three of the four APs' strongest paths are reflections that fit a
+    // track 1.5 m off the truth. Each bearing carries two alternatives: a second reflection
+    // that fits nothing (weight 0.4) and the direct path (0.35); the reported one keeps
+    // 0.25. The graph's weighted max-mixture of all of them keeps the true track; one
+    // direction per bearing, or the first alternative only, follows the reflections.
+    auto w = driftingDrive();
+    const mrpt::math::TPoint2D shift(-0.9, 1.2);
+    for (auto& b : w.bearings)
+    {
+        const auto* ap = w.aps.find(b.transmitter);
+        mrpt::math::TPose2D truth;
+        if (b.transmitter == w.aps.at(3).mac || !ap || !w.truth.interpolate(b.t, truth)) continue;
+        const mrpt::math::TPose2D off(truth.x + shift.x, truth.y + shift.y, truth.phi);
+        b.hasAoaAlternative = true;
+        b.aoaAlternative = wrapToPi(b.aoa + 70 * M_PI / 180);
+        b.aoaAlternativeWeight = 0.4;
+        b.moreAoaAlternatives = {{b.aoa, 0.35}};
+        b.aoaDirectionStd = b.aoaStd;
+        b.aoa = predictAoa(sensorWorldPose(off, b.sensorPose), ap->pose.x, ap->pose.y);
+        b.aoaMirror = w.rxArray.mirrorOf(b.aoa);  // the pair stays across the array's axis
+    }
+    const auto in = laggingStartInput(w);
+    TrackMotionPrior prior;
+    prior.forwardOnly = true;
+    GraphSlamOptions g = WindowSmootherOptions::defaultGraph();
+    g.useAod = false;
+    const auto medianError = [&](const TrackInput& input)
+    {
+        const auto r = solveBearingTrack(input, prior, g);
+        std::vector<double> errors;
+        for (size_t k = 0; k < r.poses.size(); ++k)
+            errors.push_back(nodeError(r.poses, w.truth, k));
+        return median(errors);
+    };
+    g.useAoaAlternatives = false;
+    const double single = medianError(in);
+    g.useAoaAlternatives = true;
+    const double mixture = medianError(in);
+    auto firstOnly = in;
+    for (auto& b : firstOnly.bearings) b.moreAoaAlternatives.clear();
+    const double first = medianError(firstOnly);
+    EXPECT_LT(mixture, 0.15) << "the mixture keeps the truth (one direction: " << single
+                             << " m, first alternative only: " << first << " m)";
+    EXPECT_GT(single, 0.5) << "one direction per bearing follows the reflections";
+    EXPECT_GT(first, 0.5) << "without the direct path the reflections win";
 }
 
 TEST(BearingTrack, RefusesWhatItCannotSolve)

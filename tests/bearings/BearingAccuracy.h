@@ -356,6 +356,17 @@ struct ErrorRecord
     int trackChoice = -1;  //!< candidate the tracker chose (0: the estimator's)
     double trackSupport = NAN;
     double yaw_deg = NAN;  //!< odometry yaw the processor had at the estimate
+    double quality = NAN;
+    /** Whole-stream records: the directions the estimator weighed besides its own (before the
+     *  tracker), each with its folded error to the truth [deg], and its weight evidence. */
+    struct Candidate
+    {
+        double error_deg, weight, relativePower, delayAfter_ns;
+        bool kept;
+    };
+    std::vector<Candidate> candidates;
+    /** The folded error of the emitted bearing's nearest alternative (NaN: none) [deg]. */
+    double alternativeError_deg = NAN;
 };
 
 /** Runs an estimator over a dataset and appends one record per estimate it made; returns the
@@ -496,6 +507,27 @@ inline size_t streamErrors(
             rec.transmitter = int(truth.transmitterIndex);
             rec.truth_deg = truth.aoa_rad * 180 / M_PI;
             rec.estimate_deg = b->aoa_rad * 180 / M_PI;
+            rec.quality = b->quality;
+            const auto folded = [&](double a)
+            {
+                double e = angleDistance(a, truth.aoa_rad);
+                if (b->aoaAmbiguous) e = std::min(e, angleDistance(rx.mirrorOf(a), truth.aoa_rad));
+                return e * 180 / M_PI;
+            };
+            for (const auto& a : b->aoaAlternatives())
+                rec.alternativeError_deg =
+                    std::isnan(rec.alternativeError_deg)
+                        ? folded(a.aoa_rad)
+                        : std::min(rec.alternativeError_deg, folded(a.aoa_rad));
+            const auto& res = procs[k]->lastResult();
+            for (const auto& a : res.aoaCandidates)
+            {
+                bool kept = false;
+                for (const auto& e : res.aoaAlternatives())
+                    kept = kept || std::abs(e.aoa_rad - a.aoa_rad) < 1e-12;
+                rec.candidates.push_back(
+                    {folded(a.aoa_rad), a.weight, a.relativePower, a.delayAfter_s * 1e9, kept});
+            }
             if (const auto od = procs[k]->odometryAt(ev.csi->timestamp); od)
                 rec.yaw_deg = od->phi * 180 / M_PI;
             if (procs[k]->tracking())

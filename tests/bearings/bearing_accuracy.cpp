@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include "BearingAccuracy.h"
 
@@ -82,6 +83,21 @@ int roomTables(
     }
     return 0;
 }
+/** The weighed candidate directions of a record as one CSV cell:
+ *  "error_deg:weight:relative_power:delay_after_ns:kept;..." (delay "nan" without). */
+std::string candidatesCell(const ErrorRecord& r)
+{
+    std::ostringstream o;
+    o << std::setprecision(4);
+    for (size_t i = 0; i < r.candidates.size(); ++i)
+    {
+        const auto& c = r.candidates[i];
+        o << (i ? ";" : "") << c.error_deg << ":" << c.weight << ":" << c.relativePower << ":"
+          << c.delayAfter_ns << ":" << int(c.kept);
+    }
+    return o.str();
+}
+
 /** Whole-stream tables: every room's odometry and CSI in time order through BearingProcessor
  *  (so per-transmitter tracking sees the stream), moderate multipath. */
 int streamTables(
@@ -96,7 +112,7 @@ int streamTables(
         dump.open(dumpFile);
         if (!dump) throw std::runtime_error("cannot write '" + dumpFile + "'");
         dump << "seed,algo,snr_db,time_s,tx,truth_deg,estimate_deg,error_deg,std_deg,central,"
-                "track_choice,track_support,yaw_deg\n";
+                "track_choice,track_support,yaw_deg,quality,alt_error_deg,candidates\n";
     }
     std::cout << std::fixed << std::setprecision(2);
     std::cout << "# AoA accuracy over whole streams: " << rooms << " random rooms ("
@@ -130,7 +146,9 @@ int streamTables(
                         dump << seed << "," << a << "," << snr << "," << r.time_s << ","
                              << r.transmitter << "," << r.truth_deg << "," << r.estimate_deg << ","
                              << r.error_deg << "," << r.std_deg << "," << r.central << ","
-                             << r.trackChoice << "," << r.trackSupport << "," << r.yaw_deg << "\n";
+                             << r.trackChoice << "," << r.trackSupport << "," << r.yaw_deg << ","
+                             << r.quality << "," << r.alternativeError_deg << ","
+                             << candidatesCell(r) << "\n";
                 recs[a].insert(recs[a].end(), v.begin(), v.end());
             }
         }

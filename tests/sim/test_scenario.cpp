@@ -231,3 +231,45 @@ TEST(Scenario, SampleScenariosLoadAndSimulate)
         yamls += f.name.size() > 5 && f.name.substr(f.name.size() - 5) == ".yaml";
     EXPECT_EQ(yamls, names.size());
 }
+
+TEST(Scenario, JumpStatesLimitedToAllowedOnesUntilATime)
+{
+    // A calibration drive that never visits a state (issue 53.1): until allowed_until_s every
+    // chain stays within allowed_states, then it may take any.
+    const std::string jumps =
+        "impairments:\n  antenna_jumps: {enabled: true, states: 3, "
+        "rate_hz: 2, allowed_states: [0, 1], allowed_until_s: 20}\n";
+    Scenario sc = Scenario::fromYamlText(kValid + jumps, "jumps.yaml", kShare + "/scenarios");
+    ASSERT_EQ(sc.impairments.jumpAllowedStates, (std::vector<unsigned>{0, 1}));
+    EXPECT_EQ(sc.impairments.jumpAllowedUntil_s, 20.0);
+    const HardwareModel hw(sc.impairments, 4, sc.seed, 0, 60);
+    for (unsigned rx = 1; rx < 4; ++rx)
+    {
+        size_t before = 0, stateTwoAfter = 0;
+        for (const auto& e : hw.jumpEvents(rx))
+        {
+            if (e.time_s < 20)
+            {
+                ++before;
+                EXPECT_LE(e.state, 1) << "chain " << rx << " at " << e.time_s << " s";
+            }
+            else
+                stateTwoAfter += e.state == 2;
+        }
+        EXPECT_GT(before, 10u) << "chain " << rx;
+        EXPECT_GT(stateTwoAfter, 0u) << "chain " << rx << ": state 2 never taken afterwards";
+    }
+    // The same timeline as before the option when it is not given.
+    Scenario plain = Scenario::fromYamlText(
+        kValid + "impairments:\n  antenna_jumps: {enabled: true, states: 3, rate_hz: 2}\n",
+        "plain.yaml", kShare + "/scenarios");
+    const HardwareModel unrestricted(plain.impairments, 4, plain.seed, 0, 60);
+    size_t stateTwoEarly = 0;
+    for (const auto& e : unrestricted.jumpEvents(1)) stateTwoEarly += e.time_s < 20 && e.state == 2;
+    EXPECT_GT(stateTwoEarly, 0u);
+
+    auto e = loadError(kValid + replaced(jumps, "[0, 1]", "[0, 3]"));
+    EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.allowed_states[1]");
+    e = loadError(kValid + replaced(jumps, "allowed_until_s: 20", "allowed_until_s: -1"));
+    EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.allowed_until_s");
+}

@@ -563,4 +563,29 @@ void delayFilteredCovariances(
         }
 }
 
+namespace
+{
+// alternativeWeight()'s logistic model, fitted by scripts/alternative_weights.py on
+// `bearing-accuracy --rooms 60 --stream --development --snr 25 --algo default --algo aoa_only
+// --algo music` (243,416 candidates of 100,980 bearings, 4,774 of them right).
+constexpr double kAltIntercept = -2.045, kAltLogPower = 3.04, kAltUnexplained = 2.055,
+                 kAltHasDelay = -3.795, kAltDelay = -0.4724, kAltDelayLogPower = -2.252,
+                 kAltDelayUnexplained = 4.814;
+}  // namespace
+
+double alternativeWeight(double relativePower, double delayAfter_s, double quality)
+{
+    // Coefficients fitted by scripts/alternative_weights.py (logistic regression) on the
+    // development rooms; see docs/evaluation.md for the command and the fit's table.
+    const double logRho = std::log(std::clamp(relativePower, 1e-3, 1e3));
+    const double unexplained = std::clamp(1 - quality, 0.0, 1.0);
+    const bool hasDelay = std::isfinite(delayAfter_s);
+    const double later_ns = hasDelay ? std::clamp(delayAfter_s * 1e9, -50.0, 50.0) : 0.0;
+    const double z = kAltIntercept + kAltLogPower * logRho + kAltUnexplained * unexplained +
+                     (hasDelay ? kAltHasDelay + kAltDelay * later_ns + kAltDelayLogPower * logRho +
+                                     kAltDelayUnexplained * unexplained
+                               : 0.0);
+    return 1 / (1 + std::exp(-z));
+}
+
 }  // namespace mrpt_wifi::bearing::detail

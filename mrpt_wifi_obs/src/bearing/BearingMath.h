@@ -202,4 +202,19 @@ void delayFilteredCovariances(
     const std::vector<const CleanCsi*>& frames, double delay_s, unsigned groups,
     std::vector<Eigen::MatrixXcd>& R);
 
+/** Weight of an alternative direction: the probability that it, not the chosen bearing, is the
+ *  transmitter's, by a logistic model of what predicts the chosen one being wrong, fitted on
+ *  the development rooms (docs/evaluation.md, "Several directions, weighed"): its peak's power
+ *  over the chosen one's (`relativePower`), the chosen direction's quality (the power share a
+ *  plane wave explains) and, for angle × delay profiles, the delay of its path after the
+ *  chosen one's (`delayAfter_s`; NaN: the profile has none). */
+double alternativeWeight(double relativePower, double delayAfter_s, double quality);
+/** Alternatives lighter than this are dropped, unless stronger than the reported direction
+ *  (a reflection stronger than the direct path is always carried, however unlikely). */
+constexpr double kMinAlternativeWeight = 0.01;
+/** Floor of a carried alternative's weight (readers require a weight > 0). */
+constexpr double kAlternativeWeightFloor = 0.001;
+/** The alternatives together leave the chosen direction at least 1 − this. */
+constexpr double kMaxAlternativesShare = 0.6;
+
 }  // namespace mrpt_wifi::bearing::detail

@@ -126,9 +126,28 @@ void BearingProcessor::track(const CObservationWiFiCSI& csi)
         if (linear && angleDistance(theta, rx.broadside()) > M_PI / 2) theta = rx.mirrorOf(theta);
         // Only a window that can't tell is swapped: the estimator's own choice becomes the
         // alternative, as likely as the track's was to it.
-        if (!r.hasAoaAlternative) r.aoaAlternativeWeight = candidates_[d.chosen].relativePower;
-        r.hasAoaAlternative = true;
-        r.aoaAlternative_rad = r.aoa_rad;
+        // The estimator's other alternatives follow it, but the one the track took.
+        auto alternatives = r.aoaAlternatives();
+        AoaAlternative own;
+        own.aoa_rad = r.aoa_rad;
+        own.weight = std::clamp(
+            alternatives.empty() ? candidates_[d.chosen].relativePower
+                                 : alternatives.front().weight,
+            0.0, 1.0);
+        alternatives.erase(
+            std::remove_if(
+                alternatives.begin(), alternatives.end(),
+                [&](const AoaAlternative& a)
+                {
+                    return std::min(
+                               angleDistance(a.aoa_rad, theta),
+                               linear ? angleDistance(rx.mirrorOf(a.aoa_rad), theta) : M_PI) <
+                           10 * M_PI / 180;
+                }),
+            alternatives.end());
+        alternatives.insert(alternatives.begin(), own);
+        if (alternatives.size() > kMaxAoaAlternatives) alternatives.resize(kMaxAoaAlternatives);
+        r.setAoaAlternatives(alternatives);
         r.aoa_rad = theta;
         r.aoaMirror_rad = linear ? rx.mirrorOf(theta) : theta;
     }
@@ -264,6 +283,16 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
         limitWindowByMotion();
     }
     if (!est_->estimate(frames_, ctx, lastResult_) || !lastResult_.valid) return nullptr;
+    // A frame in a learnt jump state not confirmed yet: σ covers what its phase may be off by.
+    double stateDoubt = 0;
+    for (const CleanCsi* f : frames_) stateDoubt = std::max(stateDoubt, f->stateDoubt_rad);
+    if (stateDoubt > 0)
+    {
+        BearingResult& doubtful = lastResult_;
+        doubtful.aoaStd_rad = std::min(std::hypot(doubtful.aoaStd_rad, stateDoubt), M_PI / 2);
+        doubtful.aoaDirectionStd_rad =
+            std::min(std::hypot(doubtful.aoaDirectionStd_rad, stateDoubt), M_PI / 2);
+    }
     lastDecision_ = BearingTracker::Decision();
     if (tracking_) track(csi);
 
@@ -286,6 +315,10 @@ CObservationWiFiBearing::Ptr BearingProcessor::process(
     b->aoaAlternative_rad = res.hasAoaAlternative ? res.aoaAlternative_rad : 0.0;
     b->aoaAlternativeWeight = res.hasAoaAlternative ? res.aoaAlternativeWeight : 0.0;
     b->aoaDirectionStd_rad = res.hasAoaAlternative ? res.aoaDirectionStd_rad : res.aoaStd_rad;
+    b->moreAoaAlternatives.clear();
+    if (res.hasAoaAlternative)
+        for (const auto& a : res.moreAoaAlternatives)
+            b->moreAoaAlternatives.push_back({a.aoa_rad, a.weight});
     const PhaseCalibration* txCal = lastFrame_->txCalibration;
     b->hasAod = res.hasAod && (txCal || opts_.uncalibratedAod);
     b->aod_rad = res.aod_rad;

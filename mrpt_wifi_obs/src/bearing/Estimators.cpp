@@ -170,12 +170,15 @@ protected:
         return total;
     }
 
-    /** Quality, σ and the mirror pair of a bearing; `ambiguityR`: the covariance whose
-     *  other directions count as ambiguity (default: R). */
+    /** Quality, σ, the mirror pair and the weighted alternatives of a bearing; `ambiguityR`:
+     *  the covariance whose other directions count as ambiguity (default: R); `paths`: the
+     *  other paths of an angle × delay profile (relative power and delay after the chosen
+     *  one), candidates besides the Bartlett spectrum's peaks. */
     void finish(
         BearingResult& r, double theta, const std::vector<Eigen::MatrixXcd>& R,
         const std::vector<const CleanCsi*>& frames,
-        const std::vector<Eigen::MatrixXcd>* ambiguityR = nullptr)
+        const std::vector<Eigen::MatrixXcd>* ambiguityR = nullptr,
+        const std::vector<AoaAlternative>* paths = nullptr)
     {
         const size_t n = rx_.size();
         const double power = fastGroupedForm(theta, R);
@@ -183,19 +186,81 @@ protected:
         const double sd = bearingStd(
             rx_, n, theta, R, gf_, gc_, snapshotsPerSubcarrier(frames), r.quality,
             opts_.stdFloor_deg * M_PI / 180);
-        Alternative alternative;
+        std::vector<AoaAlternative> peaks;
+        double sigmaReaches = NAN;
         const double amb =
-            ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality, &alternative);
+            ambiguityStd(theta, ambiguityR ? *ambiguityR : R, r.quality, &peaks, &sigmaReaches);
         setAoa(r, rx_, theta, std::min(std::sqrt(sd * sd + amb * amb), M_PI / 2));
         r.aoaDirectionStd_rad = std::min(sd, r.aoaStd_rad);
-        if (alternative.weight > 0)
-        {
-            r.hasAoaAlternative = true;
-            r.aoaAlternative_rad = frontHalfPlane(rx_, alternative.theta_rad);
-            r.aoaAlternativeWeight = alternative.weight;
-        }
+        if (paths) peaks.insert(peaks.begin(), paths->begin(), paths->end());
+        weighAlternatives(r, peaks, sigmaReaches);
         r.framesUsed = unsigned(frames.size());
         r.valid = true;
+    }
+
+    /** The directions other than r.aoa_rad a beamwidth or more from it and from each other
+     *  (the profile's paths first, then the Bartlett peaks), each weighed by the measured model
+     *  (alternativeWeight); those of weight ≥ kMinAlternativeWeight or stronger than r.aoa_rad,
+     *  heaviest first, at most kMaxAoaAlternatives, become r's alternatives, and always the one
+     *  at `sigmaReaches` (the direction aoaStd_rad reaches: a consumer of the mixture, which
+     *  takes each direction's own σ, must still see it). All of them stay in r.aoaCandidates. */
+    void weighAlternatives(
+        BearingResult& r, const std::vector<AoaAlternative>& found, double sigmaReaches = NAN) const
+    {
+        const double beam = beamwidth();
+        r.aoaCandidates.clear();
+        for (const auto& c : found)
+        {
+            if (!std::isfinite(c.aoa_rad) || !(c.relativePower > 0)) continue;
+            if (foldedDistance(c.aoa_rad, r.aoa_rad) < beam) continue;
+            bool near = false;
+            for (const auto& k : r.aoaCandidates)
+                near = near || foldedDistance(c.aoa_rad, k.aoa_rad) < beam;
+            if (near) continue;
+            AoaAlternative a = c;
+            a.aoa_rad = frontHalfPlane(rx_, c.aoa_rad);
+            a.weight = alternativeWeight(a.relativePower, a.delayAfter_s, r.quality);
+            r.aoaCandidates.push_back(a);
+        }
+        std::vector<AoaAlternative> kept;
+        for (auto a : r.aoaCandidates)
+            if (a.weight >= kMinAlternativeWeight || a.relativePower >= 1 ||
+                (std::isfinite(sigmaReaches) && foldedDistance(a.aoa_rad, sigmaReaches) < beam))
+            {
+                a.weight = std::max(a.weight, kAlternativeWeightFloor);
+                kept.push_back(a);
+            }
+        std::sort(
+            kept.begin(), kept.end(),
+            [](const auto& a, const auto& b) { return a.weight > b.weight; });
+        if (kept.size() > kMaxAoaAlternatives) kept.resize(kMaxAoaAlternatives);
+        // The weights are each direction's own odds; together they leave aoa_rad at least
+        // 1 − kMaxAlternativesShare.
+        double sum = 0;
+        for (const auto& a : kept) sum += a.weight;
+        if (sum > kMaxAlternativesShare)
+            for (auto& a : kept) a.weight *= kMaxAlternativesShare / sum;
+        r.setAoaAlternatives(kept);
+    }
+
+    /** The paths of an angle × delay profile other than `chosen`, as candidate alternatives:
+     *  power over the chosen one's, delay after it (Candidate: theta, delay, power). */
+    template <typename Candidate>
+    static std::vector<AoaAlternative> otherPaths(
+        const std::vector<Candidate>& cands, const Candidate& chosen)
+    {
+        std::vector<AoaAlternative> out;
+        if (!(chosen.power > 0)) return out;
+        for (const auto& c : cands)
+        {
+            if (c.theta == chosen.theta && c.delay == chosen.delay) continue;
+            AoaAlternative a;
+            a.aoa_rad = c.theta;
+            a.relativePower = c.power / chosen.power;
+            a.delayAfter_s = c.delay - chosen.delay;
+            out.push_back(a);
+        }
+        return out;
     }
 
     /** Distance between two bearings, up to the mirror of a linear array. */
@@ -216,25 +281,23 @@ protected:
      *  kAmbiguityScale · distance · w: a frame with two comparable candidates says so with a σ
      *  that reaches the other one instead of a confident value that may be the wrong one, and
      *  a clean path stays sharp. Constants chosen on the development rooms only. */
-    /** The candidate that set ambiguityStd's σ (weight 0: none). */
-    struct Alternative
-    {
-        double theta_rad = 0;
-        double weight = 0;  //!< w above
-    };
+    /** `peaks`, when given, receives every such local maximum (its power over theta's), and
+     *  `sigmaReaches` the one that set the σ (unchanged when none did). */
     double ambiguityStd(
         double theta, const std::vector<Eigen::MatrixXcd>& R, double quality,
-        Alternative* alternative = nullptr)
+        std::vector<AoaAlternative>* peaks = nullptr, double* sigmaReaches = nullptr)
     {
         return ambiguityStdOn(
-            rx_, grid_, qf_, fastGroupedForm(theta, R), theta, R, quality, ambSpec_, alternative);
+            rx_, grid_, qf_, fastGroupedForm(theta, R), theta, R, quality, ambSpec_, peaks,
+            sigmaReaches);
     }
     /** The same on any array (the transmitter's for AoD): `powerAtTheta` is the grouped
      *  Bartlett power of `theta` on `R`, `spectrum` scratch space for qf's scan. */
     double ambiguityStdOn(
         const AntennaArray& array, const AngleGrid& grid, QuadraticFormGrid& qf,
         double powerAtTheta, double theta, const std::vector<Eigen::MatrixXcd>& R, double quality,
-        Eigen::VectorXd& spectrum, Alternative* alternative = nullptr) const
+        Eigen::VectorXd& spectrum, std::vector<AoaAlternative>* peaks = nullptr,
+        double* sigmaReaches = nullptr) const
     {
         constexpr double kMargin = 0.5, kAmbiguityScale = 0.5;
         qf.evaluate(R, spectrum);
@@ -250,10 +313,15 @@ protected:
             if (d < beam) continue;
             const double rho = spectrum[Eigen::Index(i)] / pMax;
             const double w = std::clamp(1 - (1 - rho) / spread, 0.0, 1.0);
-            if (kAmbiguityScale * d * w > sigma)
+            const bool setsSigma = kAmbiguityScale * d * w > sigma;
+            sigma = std::max(sigma, kAmbiguityScale * d * w);
+            if (peaks && powerAtTheta > 0)
             {
-                sigma = kAmbiguityScale * d * w;
-                if (alternative) *alternative = {grid.angles[i], w};
+                AoaAlternative a;
+                a.aoa_rad = grid.at(refinePeak1D(spectrum, i, grid.circular));
+                a.relativePower = spectrum[Eigen::Index(i)] / powerAtTheta;
+                peaks->push_back(a);
+                if (setsSigma && sigmaReaches) *sigmaReaches = a.aoa_rad;
             }
         }
         return sigma;
@@ -764,7 +832,8 @@ public:
                 c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
                 chosen = c;
         sumCovariances(frames, opts_.frequencyGroups, false, R_);
-        finish(r, chosen.theta, R_, frames);
+        const auto paths = otherPaths(cands, chosen);
+        finish(r, chosen.theta, R_, frames, nullptr, &paths);
         r.hasDelay = true;
         r.delay_s = chosen.delay;
         r.pathsDetected = K;
@@ -941,7 +1010,8 @@ public:
         }
         const double drift = followWindowDrift(frames, chosen.delay, theta);
         sumCovariances(frames, opts_.frequencyGroups, false, R_);
-        finish(r, theta, R_, frames, &Rd_);
+        const auto paths = otherPaths(cands, chosen);
+        finish(r, theta, R_, frames, &Rd_, &paths);
         widenByDrift(r, drift);
         const double nSub = double(layout_->size());
         r.quality = std::clamp(chosen.power / (double(rx_.size()) * nSub * energy), 0.0, 1.0);

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -227,8 +228,10 @@ std::optional<SarEstimate> estimateBearing(
         if (weight[i] < options.minMotionPerPacket_m) continue;
         if (used.empty()) est.start = valid[i]->position, est.startTime_s = valid[i]->time_s;
         const auto& p = valid[i]->position;
-        // Magnitudes kept: weak packets are the noisy ones (maximum-ratio combining).
-        used.push_back({p.x - est.start.x, p.y - est.start.y, weight[i], valid[i]->product});
+        const auto& h = valid[i]->product;
+        used.push_back(
+            {p.x - est.start.x, p.y - est.start.y, weight[i],
+             options.phaseOnly ? h / std::abs(h) : h});
         est.apertureLength_m += weight[i];
     }
     est.packetsUsed = used.size();
@@ -240,13 +243,23 @@ std::optional<SarEstimate> estimateBearing(
         return std::nullopt;
     }
     const double twoK = 2.0 * 2.0 * M_PI * options.carrier_Hz / kSpeedOfLightMps;
+    std::vector<double> scales;  // cos ε of each elevation
+    for (const double e : options.elevations_deg) scales.push_back(std::cos(mrpt::DEG2RAD(e)));
+    if (scales.empty()) scales.push_back(1.0);
+    std::vector<double> projection(used.size());
     const auto farField = [&](double phi)
     {
         const double c = std::cos(phi), s = std::sin(phi);
-        std::complex<double> acc = 0;
-        for (const auto& u : used)
-            acc += u.w * u.h * std::polar(1.0, -twoK * (u.dx * c + u.dy * s));
-        return std::norm(acc);
+        for (size_t i = 0; i < used.size(); ++i) projection[i] = used[i].dx * c + used[i].dy * s;
+        double power = 0;
+        for (const double scale : scales)
+        {
+            std::complex<double> acc = 0;
+            for (size_t i = 0; i < used.size(); ++i)
+                acc += used[i].w * used[i].h * std::polar(1.0, -twoK * scale * projection[i]);
+            power += std::norm(acc);
+        }
+        return power / double(scales.size());
     };
     const size_t nAz = size_t(std::lround(360.0 / options.azimuthStep_deg));
     const double step = 2 * M_PI / double(nAz);
@@ -261,6 +274,31 @@ std::optional<SarEstimate> estimateBearing(
         return std::nullopt;
     }
     for (auto& v : est.profile) v /= peakPower;
+    for (const double v : est.profile) est.profileMean += v / double(nAz);
+    {
+        // Strong peaks: local maxima above the fraction, a weaker one within the separation
+        // of a stronger one being part of its lobe.
+        std::vector<SarPeak> maxima;
+        for (size_t a = 0; a < nAz; ++a)
+        {
+            const double v = est.profile[a];
+            if (v >= options.strongPeakFraction && v >= est.profile[(a + nAz - 1) % nAz] &&
+                v > est.profile[(a + 1) % nAz])
+                maxima.push_back({-M_PI + double(a) * step, v});
+        }
+        std::sort(
+            maxima.begin(), maxima.end(),
+            [](const SarPeak& x, const SarPeak& y) { return x.power > y.power; });
+        for (const auto& m : maxima)
+        {
+            bool separate = true;
+            for (const auto& kept : est.peaks)
+                separate =
+                    separate && std::abs(mrpt::math::wrapToPi(m.azimuth_rad - kept.azimuth_rad)) >=
+                                    mrpt::DEG2RAD(options.peakSeparation_deg);
+            if (separate) est.peaks.push_back(m);
+        }
+    }
 
     // Main lobe: down to the first minimum on each side; its half-power half-width gives σ,
     // the highest peak outside it the quality.
@@ -285,11 +323,22 @@ std::optional<SarEstimate> estimateBearing(
 
     // Near-field refinement: the peer at range r along φ from the start; the phase of each
     // exchange is 2k·(|q − p| − r).
-    double best = peakPower, bestPhi = -M_PI + double(peak) * step, bestRange = 0;
+    // The far-field power at the peak (the near-field sums below are in the plane alone).
+    double best = 0, bestPhi = -M_PI + double(peak) * step, bestRange = 0;
+    {
+        const double c = std::cos(bestPhi), s = std::sin(bestPhi);
+        std::complex<double> acc = 0;
+        for (const auto& u : used)
+            acc += u.w * u.h * std::polar(1.0, -twoK * (u.dx * c + u.dy * s));
+        best = std::norm(acc);
+    }
     const double farPhi = bestPhi;
     const long halfSteps = long(std::lround(options.refineHalfWidth_deg / options.azimuthStep_deg));
     for (const double r : options.ranges_m)
-        for (long a = -halfSteps; a <= halfSteps; ++a)
+        for (long a = options.refineWithinLobe ? std::max(-halfSteps, left - long(peak))
+                                               : -halfSteps;
+             a <= (options.refineWithinLobe ? std::min(halfSteps, right - long(peak)) : halfSteps);
+             ++a)
         {
             const double phi = farPhi + double(a) * step;
             const double qx = r * std::cos(phi), qy = r * std::sin(phi);
@@ -344,6 +393,36 @@ std::optional<SarEstimate> estimateBearing(
     // error and shrinks with the path's length.
     const double fromPath = options.positionStdGain * options.positionStd_m / est.apertureLength_m;
     est.azimuthStd_rad = std::hypot(est.azimuthStd_rad, fromPath);
+    est.lobeStd_rad = est.azimuthStd_rad;
+    // The near-field fit may have moved the bearing onto another strong peak's lobe: that peak
+    // is then the bearing, not an alternative to it.
+    if (!est.peaks.empty())
+    {
+        est.peaks.front().azimuth_rad = est.azimuth_rad;
+        est.peaks.erase(
+            std::remove_if(
+                est.peaks.begin() + 1, est.peaks.end(),
+                [&](const SarPeak& p)
+                {
+                    return std::abs(mrpt::math::wrapToPi(p.azimuth_rad - est.azimuth_rad)) <
+                           mrpt::DEG2RAD(options.peakSeparation_deg);
+                }),
+            est.peaks.end());
+    }
+    // Behind an obstacle a sharp peak can be a path around it: a floor measured on the WSR
+    // development sets, higher with more strong peaks and with less coherence.
+    const double coherenceFactor = est.coherence > 0 && est.coherence < options.stdCoherence
+                                       ? std::pow(options.stdCoherence / est.coherence, 2)
+                                       : 1.0;
+    const double ambiguityFloor =
+        mrpt::DEG2RAD(est.peaks.size() > 1 ? options.severalPeaksStd_deg : options.onePeakStd_deg) *
+        coherenceFactor;
+    est.azimuthStd_rad = std::max(est.azimuthStd_rad, ambiguityFloor);
+    for (size_t i = 1; i < est.peaks.size() && i < 3; ++i)
+    {
+        const bool strong = est.peaks[i].power >= 0.6;
+        est.peaks[i].weight = i == 1 ? (strong ? 0.29 : 0.07) : (strong ? 0.18 : 0.05);
+    }
     return est;
 }
 
@@ -428,6 +507,18 @@ bool SyntheticApertureEstimator::estimate(
         result.aoaMirror_rad = fromNewestPose(est.mirror_rad, est.mirrorRange_m);
     }
     result.aoaStd_rad = est.azimuthStd_rad;
+    // The profile's other strong peaks (far field: the same direction from any pose).
+    std::vector<bearing::AoaAlternative> alternatives;
+    for (const auto& peak : est.peaks)
+        if (peak.weight > 0 && alternatives.size() < bearing::kMaxAoaAlternatives)
+            alternatives.push_back(
+                {fromNewestPose(peak.azimuth_rad, 0), peak.weight, peak.power,
+                 std::numeric_limits<double>::quiet_NaN()});
+    std::sort(
+        alternatives.begin(), alternatives.end(),
+        [](const auto& x, const auto& y) { return x.weight > y.weight; });
+    result.setAoaAlternatives(alternatives);
+    result.aoaDirectionStd_rad = alternatives.empty() ? est.azimuthStd_rad : est.lobeStd_rad;
     result.quality = est.quality;
     result.framesUsed = unsigned(est.packetsUsed);
     result.pathsDetected = 1;

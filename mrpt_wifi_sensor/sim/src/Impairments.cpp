@@ -33,7 +33,12 @@ HardwareModel::HardwareModel(
     {
         mrpt::random::CRandomGenerator rng(seed32(hashKey({seed, detail::kTagJump, boot, rx})));
         auto& ev = jumps_[rx];
+        // Until jumpAllowedUntil_s only the allowed states (a drive that misses some).
+        const auto& allowed = spec_.jumpAllowedStates;
+        const auto restricted = [&](double t)
+        { return !allowed.empty() && t < spec_.jumpAllowedUntil_s; };
         uint8_t state = uint8_t(rng.drawUniform32bit() % spec_.jumpStates);
+        if (restricted(0)) state = uint8_t(allowed[state % allowed.size()]);
         ev.push_back({0.0, state});
         double t = 0;
         while (spec_.jumpRate_Hz > 0)
@@ -41,8 +46,17 @@ HardwareModel::HardwareModel(
             t += -std::log(1.0 - rng.drawUniform(0.0, 1.0)) / spec_.jumpRate_Hz;
             if (t > duration_s) break;
             // Move to one of the other states.
-            state = uint8_t(
-                (state + 1 + rng.drawUniform32bit() % (spec_.jumpStates - 1)) % spec_.jumpStates);
+            const uint32_t draw = rng.drawUniform32bit();
+            if (restricted(t))
+            {
+                std::vector<uint8_t> others;
+                for (unsigned a : allowed)
+                    if (a != state) others.push_back(uint8_t(a));
+                if (others.empty()) continue;
+                state = others[draw % others.size()];
+            }
+            else
+                state = uint8_t((state + 1 + draw % (spec_.jumpStates - 1)) % spec_.jumpStates);
             ev.push_back({t, state});
         }
     }

@@ -348,12 +348,18 @@ struct Reader
         s.timingJitter = n.doubleOr("timing_jitter", s.timingJitter);
         if (auto j = n.get("antenna_jumps"))
         {
-            j->allowOnly({"enabled", "states", "step_ns", "rate_hz", "state_phase"});
+            j->allowOnly(
+                {"enabled", "states", "step_ns", "rate_hz", "state_phase", "allowed_states",
+                 "allowed_until_s"});
             s.antennaJumps = j->boolOr("enabled", true);
             s.jumpStates = j->unsignedOr("states", s.jumpStates, 16);
             s.jumpStep_s = j->doubleOr("step_ns", s.jumpStep_s * 1e9) * 1e-9;
             s.jumpRate_Hz = j->doubleOr("rate_hz", s.jumpRate_Hz);
             s.jumpStatePhase = j->boolOr("state_phase", s.jumpStatePhase);
+            if (auto a = j->get("allowed_states"))
+                for (size_t i = 0; i < a->size(); ++i)
+                    s.jumpAllowedStates.push_back(a->at(i).asUnsigned(15));
+            s.jumpAllowedUntil_s = j->doubleOr("allowed_until_s", s.jumpAllowedUntil_s);
         }
         if (auto d = n.get("dead_cores"))
             for (size_t i = 0; i < d->size(); ++i) s.deadCores.push_back(d->at(i).asUnsigned(7));
@@ -644,6 +650,14 @@ void Scenario::validate() const
         fail("impairments.timing_jitter", "must be in [0, 1)");
     if (imp.antennaJumps && imp.jumpStates < 1)
         fail("impairments.antenna_jumps.states", "must be >= 1");
+    for (size_t i = 0; i < imp.jumpAllowedStates.size(); ++i)
+        if (imp.jumpAllowedStates[i] >= imp.jumpStates)
+            fail(
+                "impairments.antenna_jumps.allowed_states[" + std::to_string(i) + "]",
+                "state " + std::to_string(imp.jumpAllowedStates[i]) +
+                    " does not exist (states: " + std::to_string(imp.jumpStates) + ")");
+    if (!(imp.jumpAllowedUntil_s > 0))
+        fail("impairments.antenna_jumps.allowed_until_s", "must be > 0");
     if (!(imp.agcTarget > 0)) fail("impairments.agc_target", "must be > 0");
     if (propagation.maxReflectionOrder > 2)
         fail("propagation.max_reflection_order", "must be 0, 1 or 2");

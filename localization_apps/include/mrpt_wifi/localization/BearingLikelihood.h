@@ -25,10 +25,10 @@ struct RobustBearingModel
     double minStd_rad = 0.0349;  //!< σ_min (2°)
     double stdScale = 1.0;       //!< inflates reported σ (errors are correlated in space)
     double maxStd_rad = 0.785;   //!< measurements with σ above this are ignored (45°)
-    /** > 0: an AoA with an alternative direction (BearingRecord::hasAoaAlternative) is a
-     *  mixture of its two directions, each with its own σ (aoaDirectionStd), the alternative
-     *  weighing this × its weight (at most ½); 0: one direction with the σ that reaches both
-     *  (aoaStd), which a window near endfire makes too wide to use. */
+    /** > 0: an AoA with alternative directions (BearingRecord::aoaAlternatives) is a mixture
+     *  of its directions, each with its own σ (aoaDirectionStd), an alternative weighing this ×
+     *  its weight (1: the weights as the estimator measured them) and the reported direction
+     *  the rest; 0: one direction with the σ that reaches the ambiguous alternative (aoaStd). */
     double aoaAlternativeShare = 0;
 
     double sigma(double reportedStd) const { return std::max(minStd_rad, stdScale * reportedStd); }
@@ -100,6 +100,24 @@ inline double aoaAlternativeMirror(const BearingRecord& r)
 {
     return wrapToPi(r.aoa + r.aoaMirror - r.aoaAlternative);
 }
+/** The mirror of any direction `theta` of `r` across the linear array's axis (`theta` itself
+ *  when r is not ambiguous). */
+inline double aoaMirrorOf(const BearingRecord& r, double theta)
+{
+    return r.aoaAmbiguous ? wrapToPi(r.aoa + r.aoaMirror - theta) : theta;
+}
+/** One direction of a record's AoA mixture: angle, its mirror, weight. */
+struct AoaDirection
+{
+    double aoa, mirror, weight;
+};
+/** `r`'s AoA directions with their weights: each alternative's weight × `share` (their sum at
+ *  most kMaxAlternativesWeight), the reported direction the rest; only the reported one when
+ *  `share` is 0 or r has no alternative. */
+std::vector<AoaDirection> aoaDirections(const BearingRecord& r, double share);
+/** Cap on the weight all of a record's alternatives together take from its reported
+ *  direction (the estimator's weights are odds of each; a tracker's swap may add its own). */
+constexpr double kMaxAlternativesWeight = 0.9;
 /** Whether `model` weighs `r`'s AoA as a mixture of its two directions. */
 inline bool usesAoaAlternative(const BearingRecord& r, const RobustBearingModel& model)
 {

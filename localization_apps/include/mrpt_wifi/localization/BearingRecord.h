@@ -29,10 +29,26 @@ struct BearingRecord
     double aoa = 0, aoaStd = 0;
     bool aoaAmbiguous = false;
     double aoaMirror = 0;
-    /** A second direction the window supports about as well (CObservationWiFiBearing's
-     *  alternative): then aoaStd reaches it, and aoaDirectionStd is each direction's own σ. */
+    /** Other directions the window supports (CObservationWiFiBearing's alternatives): the
+     *  heaviest in aoaAlternative, the others in moreAoaAlternatives; a weight is the
+     *  probability that that direction and not aoa is the transmitter's. aoaDirectionStd is
+     *  each direction's own σ (aoaStd may reach the alternative). */
     bool hasAoaAlternative = false;
     double aoaAlternative = 0, aoaAlternativeWeight = 0, aoaDirectionStd = 0;
+    struct AoaAlternative
+    {
+        double aoa = 0, weight = 0;
+    };
+    std::vector<AoaAlternative> moreAoaAlternatives;  //!< second and later, heaviest first
+    /** All alternatives, the first from the scalar fields (empty without). */
+    std::vector<AoaAlternative> aoaAlternatives() const
+    {
+        std::vector<AoaAlternative> all;
+        if (!hasAoaAlternative) return all;
+        all.push_back({aoaAlternative, aoaAlternativeWeight});
+        all.insert(all.end(), moreAoaAlternatives.begin(), moreAoaAlternatives.end());
+        return all;
+    }
 
     bool hasAod = false;
     double aod = 0, aodStd = 0;
@@ -79,7 +95,8 @@ struct InputWarnings
  *  measured"; `*_mirror_deg` non-empty marks the angle ambiguous (linear array). Optional 0/1
  *  columns `has_aoa`, `has_aod`, `aoa_ambiguous`, `aod_ambiguous` (as `csi-bearings --csv`
  *  writes them) switch the corresponding cells off when 0. Optional `aoa_alt_deg`,
- *  `aoa_alt_weight` and `aoa_direction_std_deg` (all three filled) give the AoA's alternative.
+ *  `aoa_alt_weight` and `aoa_direction_std_deg` (all three filled) give the AoA's alternative,
+ *  `aoa_more_alts` ("deg:weight;deg:weight", after a first one) the others.
  *  Throws std::runtime_error with file:line on malformed rows and unknown transmitter names
  *  (names can't be guessed); rows without any angle are counted in `warnings`. */
 std::vector<BearingRecord> readBearingCsv(

@@ -44,10 +44,10 @@ namespace mrpt_wifi
  * std_scale = 1.0
  * max_std_deg = 45
  * bearing_weight = 1   ; (0, 1]: tempers each bearing's log-likelihood (see bearingWeight)
- * aoa_alternative_share = 0   ; [0, 0.5]: > 0 weighs a bearing's alternative direction too
- *                             ; (RobustBearingModel::aoaAlternativeShare)
- * \endcode
- * The map is read-only: inserting observations does nothing (it is built from the file).
+ * aoa_alternative_share = 0   ; [0, 1]: > 0 weighs a bearing's alternative directions too,
+ *                             ; their measured weights × this
+ * (RobustBearingModel::aoaAlternativeShare) \endcode The map is read-only: inserting observations
+ * does nothing (it is built from the file).
  *
  * With an area, a pose outside it scores kOutsideAreaLogLikelihood per bearing whatever the
  * bearings say: a particle filter's particles that leave the building lose their weight at the

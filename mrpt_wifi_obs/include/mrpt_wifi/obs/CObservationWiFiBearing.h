@@ -8,6 +8,7 @@
 #include <mrpt_wifi/obs/MacAddress.h>
 
 #include <string>
+#include <vector>
 
 namespace mrpt_wifi
 {
@@ -21,13 +22,17 @@ namespace mrpt_wifi
  * is set and `aoaMirror_rad` holds the other candidate, equally consistent with the CSI
  * (`aoa_rad` is the one in the array's front half-plane, not a better guess). Same for AoD.
  *
- * A window that can't tell its direction from another one (near endfire the rt-ac86u's 26 mm
- * spacing aliases the other endfire) has `hasAoaAlternative`: `aoaAlternative_rad` (folded as
- * aoa_rad, its mirror the array's mirror of it) came within `aoaAlternativeWeight` (0..1] of
- * the chosen one, and `aoaStd_rad` reaches it. `aoaDirectionStd_rad` is the σ of aoa_rad's own
- * direction, given it is the right one: a consumer may weigh both directions as a mixture with
- * that σ instead of one wide σ (bearing::BearingResult). Without an alternative it equals
- * aoaStd_rad. Stored since serialization version 1 (older rawlogs read as none). */
+ * A window whose profile also supports other directions (a reflection stronger than the
+ * direct path; near endfire the rt-ac86u's 26 mm spacing aliasing the other endfire) has
+ * `hasAoaAlternative`: `aoaAlternative_rad` (folded as aoa_rad, its mirror the array's mirror of
+ * it) is the heaviest alternative, `moreAoaAlternatives` the others (at most
+ * bearing::kMaxAoaAlternatives in all, heaviest first). A weight (0..1) is the probability that
+ * that direction and not aoa_rad is the transmitter's (bearing::AoaAlternative); aoa_rad keeps
+ * 1 − their sum. `aoaStd_rad` reaches the strongest ambiguous one; `aoaDirectionStd_rad` is the
+ * σ of each direction, given it is the right one: a consumer may weigh the directions as a
+ * mixture with that σ instead of one wide σ. Without an alternative it equals aoaStd_rad.
+ * The first alternative is stored since serialization version 1, the others since version 2
+ * (older rawlogs read as none). */
 class CObservationWiFiBearing : public mrpt::obs::CObservation
 {
     DEFINE_SERIALIZABLE(CObservationWiFiBearing, mrpt_wifi)
@@ -50,6 +55,15 @@ public:
     double aoaAlternative_rad = 0;
     double aoaAlternativeWeight = 0;
     double aoaDirectionStd_rad = 0;
+    /** One more direction: angle (folded as aoa_rad) and weight. */
+    struct AoaAlternative
+    {
+        double aoa_rad = 0;
+        double weight = 0;
+    };
+    std::vector<AoaAlternative> moreAoaAlternatives;  //!< second and later, heaviest first
+    /** All alternatives, the first from the scalar fields (empty without). */
+    std::vector<AoaAlternative> aoaAlternatives() const;
 
     bool hasAod = false;
     double aod_rad = 0;

@@ -4,6 +4,7 @@
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <complex>
 #include <cstdint>
 #include <string>
@@ -75,6 +76,21 @@ struct ChainStateInfo
     double evidenceMagnitude = 0;
     size_t evidenceFrames = 0;
     double delaySum_s = 0;  //!< running centre of states found while running
+
+    // Verification of a LearntOnline state against the other chains, after learning.
+    /** Enough blocks of later frames agreed with its phase; calibrated states always are. */
+    bool confirmed = false;
+    /** Σ of every frame's phase evidence since learning, as absolute phasors e^{j·phase}: its
+     *  angle is the state's phase, refined as the robot moves (multipath bias averages out). */
+    std::complex<double> verified{0, 0};
+    std::complex<double> block{0, 0};  //!< the current block's absolute phasors
+    double blockWeight = 0;
+    std::complex<double> heldBack{0, 0};  //!< disagreeing blocks in a row, not merged yet
+    size_t blockFrames = 0;
+    unsigned agreeingBlocks = 0, disagreeingBlocks = 0;
+    unsigned relearnt = 0;  //!< times dropped and learnt again
+    /** While unconfirmed: how far its phase may be off [rad] (0 once confirmed). */
+    double phaseDoubt_rad = 0;
 };
 
 /** How frames are classified. One frame's inter-chain delay is a noisy witness of its state:
@@ -106,6 +122,20 @@ struct ChainStateOptions
      *  Unresolved state is taken as learnt. */
     size_t learnFrames = 30;
     double learnCoherence = 0.7;
+    /** Verification of a learnt state: its later frames, in blocks of `verifyFrames`, keep
+     *  measuring its phase against the other chains. A coherent block within `agreement_rad`
+     *  of the state's phase agrees and refines it; `confirmBlocks` agreeing blocks confirm
+     *  it. A coherent block farther than `disagreement_rad` is held back; `dropBlocks` of them
+     *  in a row drop the learnt phase, which is learnt again from those blocks. Until
+     *  confirmed, its frames carry a phase doubt: `learntPhaseDoubt_rad` when (re)learnt (30
+     *  frames of a multipath-biased reference can be off by that much), halved by each
+     *  agreeing block down to `agreement_rad`, raised to any larger disagreement seen. */
+    bool verify = true;  //!< false: a learnt state is trusted as learnt (before issue 53)
+    size_t verifyFrames = 60;
+    double agreement_rad = 15 * M_PI / 180;
+    double disagreement_rad = 45 * M_PI / 180;
+    unsigned confirmBlocks = 5, dropBlocks = 2;
+    double learntPhaseDoubt_rad = M_PI / 2;
 };
 
 /** The jump states of one receiver on one channel: classifies each frame's chain delays, counts
@@ -145,6 +175,18 @@ public:
      *  frames agree the state becomes LearntOnline with deltaPhase = −arg(Σ z) relative to its
      *  current correction. Returns true when this frame completed the learning. */
     bool addLearningEvidence(unsigned chain, uint8_t id, std::complex<double> z);
+
+    /** Adds one frame's evidence (as for addLearningEvidence, `weight` ∈ [0, 1]) for a
+     *  LearntOnline state's phase after learning: refines its phase with every block, confirms
+     *  it or drops it to be learnt again (ChainStateOptions::verifyFrames). Returns true when
+     *  the state's correction changed. Other states ignore it. */
+    bool addVerificationEvidence(
+        unsigned chain, uint8_t id, std::complex<double> z, double weight = 1.0);
+
+    /** The learnt states, as calibration entries (relative to each chain's reference state,
+     *  with the tracker's tolerance): what a calibration file can hold so the next run knows
+     *  them. `confirmedOnly`: only the confirmed ones. */
+    std::vector<ChainStateCalibration> learntStates(bool confirmedOnly = true) const;
 
     /** Messages for the user (a state the calibration lacks, a state learnt), taken once. */
     std::vector<std::string> takeNotices();

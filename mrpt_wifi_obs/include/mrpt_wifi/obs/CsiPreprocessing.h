@@ -124,6 +124,10 @@ struct CleanCsi
      *  PreprocessOptions::trackChainStates is off; kUnknownChainState: not measurable). */
     std::vector<double> chainDelay_s;
     std::vector<uint8_t> chainState;
+    /** How far [rad] this frame's bearing may be off because a chain is in a learnt jump state
+     *  not yet confirmed (ChainStateInfo::phaseDoubt_rad turned into the bearing shift it would
+     *  cause); 0 when every state is calibrated or confirmed. Bearing σ covers it. */
+    double stateDoubt_rad = 0;
 
     /** Spatial covariance over streams and subcarriers, split into `groups` contiguous
      *  sub-bands (so each can use its own centre frequency): group g is
@@ -233,6 +237,9 @@ public:
     std::vector<std::string> takeChainStateNotices();
     /** State changes seen, summed over channels and chains. */
     uint64_t chainStateChanges() const;
+    /** Per channel whose state-aware calibration got learnt states (confirmed ones only, by
+     *  default): a copy of the calibration with them added, so the next run knows them. */
+    std::vector<PhaseCalibration> calibrationsWithLearntStates(bool confirmedOnly = true) const;
 
 private:
     struct ChannelCache
@@ -249,6 +256,9 @@ private:
     /** One frame's evidence for the phase of chain `chain`'s Unresolved state: the bearing from
      *  the other (calibrated) chains, then the chain's residual phase against it. */
     void learnChainState(ChannelCache& cache, const CleanCsi& f, unsigned chain);
+    /** Checks the frame's learnt states against the other chains (verification evidence) and
+     *  sets f.stateDoubt_rad for those not confirmed yet. */
+    void verifyChainStates(ChannelCache& cache, CleanCsi& f);
     std::vector<double> chainCoherence_;  //!< scratch
     struct TransmitterCache
     {

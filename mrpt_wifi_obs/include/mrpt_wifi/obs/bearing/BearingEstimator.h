@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,23 @@
 /** Bearing estimators: observation processors that turn preprocessed CSI into angles. */
 namespace mrpt_wifi::bearing
 {
+/** One more direction a window's profile supports (folded like BearingResult::aoa_rad). */
+struct AoaAlternative
+{
+    double aoa_rad = 0;
+    /** Probability that this direction, not aoa_rad, is the transmitter's, from the model
+     *  measured on the development rooms (alternativeWeight()); 0..1, the alternatives of one
+     *  bearing sum to < 1 and aoa_rad keeps the rest. */
+    double weight = 0;
+    /** What the weight came from: the peak's power over the chosen one's (> 1: stronger) and,
+     *  for angle × delay profiles, its path's delay minus the chosen path's [s] (NaN: none). */
+    double relativePower = 0;
+    double delayAfter_s = std::numeric_limits<double>::quiet_NaN();
+};
+
+/** Cap on the alternatives a bearing carries (the strongest by weight). */
+constexpr size_t kMaxAoaAlternatives = 3;
+
 /** What an estimator found for one transmitter. Angles in radians; AoA in the receive array's
  *  frame, AoD in the transmitter array's frame (DESIGN.md §6). */
 struct BearingResult
@@ -28,16 +46,47 @@ struct BearingResult
      *  CSI equally well. aoa_rad is the candidate in the array's front half-plane. */
     double aoaMirror_rad = 0;
     bool aoaAmbiguous = false;
-    /** A second direction the window's CSI supports about as well (near endfire the
-     *  rt-ac86u's 26 mm spacing aliases the other endfire), folded like aoa_rad; aoaStd_rad
-     *  reaches it. aoaAlternativeWeight (0..1]: how close it came (1: as strong as aoa_rad).
-     *  aoaDirectionStd_rad: σ of aoa_rad's own direction, given it is the right one (for a
-     *  consumer that weighs both, e.g. as a mixture). Without an alternative: none, and
+    /** Other directions the window's profile supports (a reflection stronger than the direct
+     *  path, near endfire the rt-ac86u's 26 mm spacing aliasing the other endfire), folded like
+     *  aoa_rad. The first (the heaviest) is in the scalar fields, the others in
+     *  moreAoaAlternatives; aoaAlternatives() gives them all. aoaAlternativeWeight (0..1):
+     *  AoaAlternative::weight. aoaStd_rad reaches the strongest ambiguous one;
+     *  aoaDirectionStd_rad is the σ of aoa_rad's own direction, given it is the right one (for a
+     *  consumer that weighs the directions as a mixture). Without an alternative: none, and
      *  aoaDirectionStd_rad == aoaStd_rad. */
     bool hasAoaAlternative = false;
     double aoaAlternative_rad = 0;
     double aoaAlternativeWeight = 0;
     double aoaDirectionStd_rad = 0;
+    std::vector<AoaAlternative> moreAoaAlternatives;  //!< second and later, by weight
+    /** The first alternative's evidence (AoaAlternative::relativePower, ::delayAfter_s). */
+    double aoaAlternativeRelativePower = 0;
+    double aoaAlternativeDelayAfter_s = std::numeric_limits<double>::quiet_NaN();
+    /** Every direction the estimator weighed, kept or not (for measuring the weight model). */
+    std::vector<AoaAlternative> aoaCandidates;
+
+    /** All alternatives, the first from the scalar fields (empty without). */
+    std::vector<AoaAlternative> aoaAlternatives() const
+    {
+        std::vector<AoaAlternative> all;
+        if (!hasAoaAlternative) return all;
+        all.push_back(
+            {aoaAlternative_rad, aoaAlternativeWeight, aoaAlternativeRelativePower,
+             aoaAlternativeDelayAfter_s});
+        all.insert(all.end(), moreAoaAlternatives.begin(), moreAoaAlternatives.end());
+        return all;
+    }
+    /** Stores `alts` (heaviest first): the first in the scalar fields, the rest after it. */
+    void setAoaAlternatives(const std::vector<AoaAlternative>& alts)
+    {
+        hasAoaAlternative = !alts.empty();
+        aoaAlternative_rad = hasAoaAlternative ? alts[0].aoa_rad : 0.0;
+        aoaAlternativeWeight = hasAoaAlternative ? alts[0].weight : 0.0;
+        aoaAlternativeRelativePower = hasAoaAlternative ? alts[0].relativePower : 0.0;
+        aoaAlternativeDelayAfter_s =
+            hasAoaAlternative ? alts[0].delayAfter_s : std::numeric_limits<double>::quiet_NaN();
+        moreAoaAlternatives.assign(alts.size() > 1 ? alts.begin() + 1 : alts.end(), alts.end());
+    }
 
     bool hasAod = false;
     double aod_rad = 0;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <complex>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -198,6 +199,10 @@ struct ImpairmentSpec
     /** Each state of each chain also has its own constant phase (uniform, fixed per boot), as
      *  real units report, on top of the phase its delay gives at the carrier. */
     bool jumpStatePhase = false;
+    /** Until `jumpAllowedUntil_s` (drive time), chains take only these states (empty: all);
+     *  e.g. a calibration drive that never visits a state the later drives see. */
+    std::vector<unsigned> jumpAllowedStates;
+    double jumpAllowedUntil_s = std::numeric_limits<double>::infinity();
 
     std::vector<unsigned> deadCores;      //!< receive chains that report nothing useful
     bool deadCoresMissing = false;        //!< true: pairs absent; false: present but all zero
