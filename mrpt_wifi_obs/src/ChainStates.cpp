@@ -215,6 +215,13 @@ const ChainStateInfo& ChainStateTracker::info(unsigned chain, uint8_t id) const
         "chain " + std::to_string(chain) + " has no state " + std::to_string(id));
 }
 
+ChainStateInfo* ChainStateTracker::findState(unsigned chain, uint8_t id)
+{
+    for (auto& s : states_.at(chain))
+        if (s.id == id) return &s;
+    return nullptr;
+}
+
 const ChainStateInfo* ChainStateTracker::reference(unsigned chain) const
 {
     for (const auto& s : states_.at(chain))
@@ -364,9 +371,7 @@ void ChainStateTracker::classify(
 
 bool ChainStateTracker::addLearningEvidence(unsigned chain, uint8_t id, std::complex<double> z)
 {
-    ChainStateInfo* s = nullptr;
-    for (auto& e : states_.at(chain))
-        if (e.id == id) s = &e;
+    ChainStateInfo* s = findState(chain, id);
     if (!s || s->origin != ChainStateOrigin::Unresolved || !(std::abs(z) > 0)) return false;
     s->evidence += z / std::abs(z);
     s->evidenceMagnitude += 1.0;
@@ -409,9 +414,7 @@ bool ChainStateTracker::addLearningEvidence(unsigned chain, uint8_t id, std::com
 bool ChainStateTracker::addVerificationEvidence(
     unsigned chain, uint8_t id, std::complex<double> z, double weight)
 {
-    ChainStateInfo* s = nullptr;
-    for (auto& e : states_.at(chain))
-        if (e.id == id) s = &e;
+    ChainStateInfo* s = findState(chain, id);
     if (!opts_.verify || !s || s->origin != ChainStateOrigin::LearntOnline || !(std::abs(z) > 0) ||
         !(weight > 0))
         return false;

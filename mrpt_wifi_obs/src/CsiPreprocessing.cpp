@@ -561,6 +561,21 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
 
 namespace
 {
+/** The bearing in the array's search interval where `power` peaks: a 1° grid, then `fineStep`
+ *  within ±1° of its best. */
+template <typename PowerFn>
+double peakBearing(const AntennaArray& array, PowerFn power, double fineStep)
+{
+    const auto [lo, hi] = array.searchInterval();
+    double best = lo, top = -1;
+    for (double t = lo; t <= hi; t += M_PI / 180)
+        if (const double p = power(t); p > top) top = p, best = t;
+    const double coarse = best;
+    for (double t = coarse - M_PI / 180; t <= coarse + M_PI / 180; t += fineStep)
+        if (const double p = power(t); p > top) top = p, best = t;
+    return best;
+}
+
 /** Wideband Bartlett power of the chains in `use` at bearing θ from sub-band covariances:
  *  Σ_g a_g^H R_g a_g, a = the chains' steering at the sub-band's centre frequency. The
  *  array is 7.8 cm wide, so across a 20 MHz sub-band its steering moves by < 0.03 rad. */
@@ -572,8 +587,7 @@ struct SubbandBartlett
 
     std::complex<double> steer(unsigned i, double theta, size_t g) const
     {
-        return std::polar(
-            1.0, 2 * M_PI * array->projection(i, theta) * centre_Hz[g] / kSpeedOfLightMps);
+        return std::polar(1.0, array->steeringPhase(i, theta, centre_Hz[g]));
     }
     /** Σ_g Σ_{k,l ∈ use} conj(a_k) R_g(k,l) a_l, chain `turned` rotated by e^{jδ}. */
     double power(double theta, unsigned nRx, int excluded, int turned = -1, double delta = 0) const
@@ -595,16 +609,8 @@ struct SubbandBartlett
     }
     double best(unsigned nRx, int excluded, int turned = -1, double delta = 0) const
     {
-        const auto [lo, hi] = array->searchInterval();
-        double theta = lo, top = -1;
-        for (double t = lo; t <= hi; t += M_PI / 180)
-            if (const double p = power(t, nRx, excluded, turned, delta); p > top)
-                top = p, theta = t;
-        const double coarse = theta;
-        for (double t = coarse - M_PI / 180; t <= coarse + M_PI / 180; t += M_PI / 1800)
-            if (const double p = power(t, nRx, excluded, turned, delta); p > top)
-                top = p, theta = t;
-        return theta;
+        return peakBearing(
+            *array, [&](double t) { return power(t, nRx, excluded, turned, delta); }, M_PI / 1800);
     }
     /** Chain i's residual phasor against the others' steered sum at θ, per sub-band summed;
      *  `coherence`: how well the sub-bands agree (|Σ| / Σ|·|). */
@@ -717,13 +723,7 @@ void CsiPreprocessor::learnChainState(ChannelCache& cache, const CleanCsi& f, un
             }
         return sum;
     };
-    const auto [lo, hi] = rxArray_.searchInterval();
-    double best = lo, bestPower = -1;
-    for (double t = lo; t <= hi; t += M_PI / 180)
-        if (const double p = power(t); p > bestPower) bestPower = p, best = t;
-    const double coarse = best;
-    for (double t = coarse - M_PI / 180; t <= coarse + M_PI / 180; t += M_PI / 3600)
-        if (const double p = power(t); p > bestPower) bestPower = p, best = t;
+    const double best = peakBearing(rxArray_, power, M_PI / 3600);
     std::complex<double> z{0, 0};
     for (unsigned m = 0; m < f.nTx; ++m)
         for (size_t j = 0; j < nSub; ++j)

@@ -587,7 +587,10 @@ TEST(ChainStates, UnconfirmedStateWidensTheBearingSigma)
         if (ev.frame.packet.jumpState[1] != missing) continue;
         ++inState;
         accepted += why == RejectReason::Accepted;
-        if (why == RejectReason::Accepted) EXPECT_EQ(clean.stateDoubt_rad, 0.0);
+        if (why == RejectReason::Accepted)
+        {
+            EXPECT_EQ(clean.stateDoubt_rad, 0.0);
+        }
     }
     EXPECT_TRUE(notices.empty()) << notices.front();
     const auto* t2 = second.chainStateTrackers().front();

@@ -195,6 +195,8 @@ public:
 
 private:
     ChainStateInfo& newState(unsigned chain, double delay_s, ChainStateOrigin origin);
+    /** Chain's state `id`, or null. */
+    ChainStateInfo* findState(unsigned chain, uint8_t id);
     const ChainStateInfo* reference(unsigned chain) const;
     /** One chain's forward-filter step; returns its state id or kUnknownChainState. */
     uint8_t classifyChain(unsigned chain, double delay_s, bool valid);
