@@ -3,12 +3,14 @@
  * wifi-calibrate: phase calibration of the receive array from a rawlog recorded while the robot
  * drove near a transmitter at a known position (or through a splitter), one YAML file per
  * channel in the folder layout the estimators and the sensor load; --check tells whether an
- * existing calibration still fits (e.g. after a router reboot). */
+ * existing calibration still fits (e.g. after a router reboot). A splitter calibration may come
+ * from several captures, each feeding some of the chains (SplitterCalibration.h). */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt_wifi/calib/CalibrationCheck.h>
 #include <mrpt_wifi/calib/CalibrationInput.h>
 #include <mrpt_wifi/calib/CalibrationReport.h>
 #include <mrpt_wifi/calib/PhaseCalibrator.h>
+#include <mrpt_wifi/calib/SplitterCalibration.h>
 #include <mrpt_wifi/obs/CommandLine.h>
 
 #include <cmath>
@@ -65,6 +67,300 @@ double meanPhase(const std::vector<double>& p)
     for (double v : p) s += std::polar(1.0, v);
     return std::arg(s);
 }
+
+/** Refuses a transmitter's frames when the array can't read their receive cores (saying what
+ *  to change); warns when the frames have fewer chains than an array without `cores`. */
+void checkFrameShape(
+    const AntennaArray& array, const std::string& arrayArg, const MacAddress& mac,
+    const RawlogSummary::Source& src)
+{
+    CsiPreprocessor pre(calibrationPreprocessOptions(), array);
+    CObservationWiFiCSI shape;
+    shape.nRx = uint8_t(src.maxRx);
+    shape.rxCores = src.rxCores;
+    const std::string why = pre.coreMismatchMessage(shape);
+    if (!why.empty())
+        throw std::runtime_error("frames from " + mac.asString() + " (" + arrayArg + "): " + why);
+    if (array.cores.empty() && src.maxRx < array.size())
+        std::cerr << "wifi-calibrate: warning: frames from " << mac.asString() << " have "
+                  << src.maxRx << " receive chains, the array " << array.size()
+                  << " elements: using the first " << src.maxRx << "\n";
+}
+
+/** Receive cores "0,1" (or "0 1") of --fed-cores as array elements, ascending. */
+std::vector<unsigned> fedElements(const std::string& text, const AntennaArray& array)
+{
+    std::string t = text;
+    std::replace(t.begin(), t.end(), ',', ' ');
+    std::istringstream is(t);
+    std::set<unsigned> elements;
+    std::string word;
+    while (is >> word)
+    {
+        size_t used = 0;
+        int core = -1;
+        try
+        {
+            core = std::stoi(word, &used);
+        }
+        catch (const std::exception&)
+        {
+        }
+        if (core < 0 || used != word.size())
+            throw std::invalid_argument(
+                "--fed-cores '" + text + "': '" + word + "' is not a receive core number");
+        bool found = false;
+        for (unsigned e = 0; e < array.size(); ++e)
+            if (array.coreOf(e) == unsigned(core)) elements.insert(e), found = true;
+        if (!found)
+            throw std::invalid_argument(
+                "--fed-cores '" + text + "': the array '" + array.name + "' reads no core " + word);
+    }
+    return {elements.begin(), elements.end()};
+}
+
+/** What wifi-calibrate --static-splitter needs besides the inputs. */
+struct SplitterRun
+{
+    AntennaArray array;
+    std::string arrayArg, outDir, reportDir;
+    std::optional<MacAddress> onlyMac;
+    std::optional<Chanspec> onlyChannel;
+    PreprocessOptions pre;
+    CalibratorOptions calibrator;
+    std::vector<std::string> fedCores;  //!< per input; empty: detect
+    double maxDisagreement_rad = 0;
+    ChainStatePolicy chainStates = ChainStatePolicy::Auto;
+    bool force = false, quiet = false;
+};
+
+std::string coreList(const AntennaArray& a, const std::vector<unsigned>& elements)
+{
+    std::string s;
+    for (size_t i = 0; i < elements.size(); ++i)
+        s += (i ? ", " : "") + std::to_string(a.coreOf(elements[i]));
+    return s;
+}
+
+/** Static splitter calibration from one or more captures, each feeding element 0 and some
+ *  of the others; one calibration file per channel for every element. */
+int calibrateSplitter(const std::vector<std::string>& inputs, const SplitterRun& run)
+{
+    const AntennaArray& array = run.array;
+    std::map<uint32_t, std::vector<SplitterCapture>> byChannel;
+    bool allDetermined = true;
+    std::cout << "Array      : " << array.name << " (" << array.size() << " elements, "
+              << run.arrayArg << ")\n"
+              << "Mode       : static splitter, " << inputs.size() << " capture(s)\n";
+    for (size_t c = 0; c < inputs.size(); ++c)
+    {
+        const std::string& in = inputs[c];
+        cli::Progress p1("wifi-calibrate: scanning " + in, !run.quiet);
+        const RawlogSummary summary = summarizeRawlog(in, [&](double f) { p1.update(f); });
+        p1.done(std::to_string(summary.csiFrames) + " CSI frames");
+        if (summary.csiFrames == 0)
+            throw std::runtime_error("'" + in + "' holds no CObservationWiFiCSI observations");
+        MacAddress mac;
+        if (run.onlyMac)
+        {
+            if (!summary.transmitters.count(*run.onlyMac))
+                throw std::runtime_error(
+                    "transmitter " + run.onlyMac->asString() + " never appears in '" + in +
+                    "'; it holds frames from:" + listMacs(summary));
+            mac = *run.onlyMac;
+        }
+        else if (summary.transmitters.size() == 1)
+            mac = summary.transmitters.begin()->first;
+        else
+            throw std::runtime_error(
+                "'" + in + "' holds frames from " + std::to_string(summary.transmitters.size()) +
+                " transmitters: choose the splitter's with --mac" + listMacs(summary));
+        checkFrameShape(array, run.arrayArg, mac, summary.transmitters.at(mac));
+
+        // Each pass reads the capture with a fresh preparer: the same frames, the same states.
+        const auto forEachFrame = [&](const std::string& what, auto&& onFrame)
+        {
+            FramePreparer preparer(array, run.pre);
+            CalibrationFrame frame;
+            std::map<std::string, uint64_t> rejected;
+            uint64_t accepted = 0;
+            cli::Progress p("wifi-calibrate: " + what, !run.quiet);
+            readRawlog(
+                in,
+                [&](const CObservationWiFiCSI& obs)
+                {
+                    if (obs.transmitter != mac) return;
+                    if (run.onlyChannel &&
+                        (obs.chanspec.centerChannel != run.onlyChannel->centerChannel ||
+                         obs.chanspec.bandwidthMHz != run.onlyChannel->bandwidthMHz))
+                        return;
+                    const RejectReason r = preparer.prepareStatic(obs, frame);
+                    if (r != RejectReason::Accepted)
+                    {
+                        ++rejected[toString(r)];
+                        return;
+                    }
+                    ++accepted;
+                    onFrame(frame);
+                },
+                {}, [&](double f) { p.update(f); });
+            p.done(std::to_string(accepted) + " frames");
+            if (accepted == 0)
+            {
+                std::string why;
+                for (const auto& [r, n] : rejected) why += ", " + std::to_string(n) + " " + r;
+                throw std::runtime_error(
+                    "'" + in + "': no usable frame from " + mac.asString() +
+                    (run.onlyChannel ? " on " + run.onlyChannel->asString() : std::string()) +
+                    (why.empty() ? std::string() : " (" + why.substr(2) + ")"));
+            }
+            return accepted;
+        };
+
+        // Which elements the splitter feeds: given, or told by how flat each one's CSI is
+        // against element 0's.
+        SplitterFeedDetector detector;
+        const uint64_t frames = forEachFrame(
+            "detecting fed chains", [&](const CalibrationFrame& f) { detector.add(f); });
+        const SplitterFeedDetector::Verdict verdict = detector.decide();
+        std::ostringstream flat;
+        for (unsigned e = 1; e < verdict.flatness.size(); ++e)
+            flat << (e > 1 ? ", " : "") << "core " << array.coreOf(e) << " "
+                 << fixed(verdict.flatness[e], 3);
+        std::vector<unsigned> fed;
+        if (!run.fedCores.empty())
+            fed = fedElements(run.fedCores[c], array);
+        else
+        {
+            if (verdict.fed.empty())
+                throw SplitterError(
+                    "'" + in + "': no chain is fed together with core " +
+                    std::to_string(array.coreOf(0)) +
+                    " (element 0): none has a flat phase against it (median RMS across the "
+                    "subcarriers: " +
+                    flat.str() + " rad; a fed chain stays below " +
+                    fixed(SplitterFeedDetector::kMaxFedFlatness, 2) +
+                    "). Is the splitter connected to core " + std::to_string(array.coreOf(0)) +
+                    "? Name the fed cores with --fed-cores if it is");
+            if (!verdict.undecided.empty())
+                throw SplitterError(
+                    "'" + in + "': cannot tell whether " +
+                    describeElement(array, verdict.undecided.front()) +
+                    " is fed by the splitter (median phase RMS across the subcarriers against "
+                    "core " +
+                    std::to_string(array.coreOf(0)) + ": " + flat.str() +
+                    " rad); name the fed cores with --fed-cores, one per capture");
+            fed = verdict.fed;
+        }
+        if (fed.empty() || fed.front() != 0 || fed.size() < 2)
+            throw SplitterError(
+                "'" + in + "': the fed cores (" + coreList(array, fed) + ") must include core " +
+                std::to_string(array.coreOf(0)) +
+                " (element 0, the reference every capture shares) and at least one other");
+        std::cout << "\nCapture    : " << in << " (" << summary.csiFrames << " CSI frames, "
+                  << frames << " used, transmitter " << mac.asString() << ")\n"
+                  << "  fed chains       : cores " << coreList(array, fed)
+                  << (run.fedCores.empty() ? " (detected" : " (--fed-cores") << "; phase RMS "
+                  << "across subcarriers against core " << array.coreOf(0) << ": " << flat.str()
+                  << " rad)\n";
+
+        PhaseCalibrator calibrator(subArray(array, fed), run.calibrator);
+        CalibrationFrame restricted;
+        forEachFrame(
+            "reading",
+            [&](const CalibrationFrame& f)
+            {
+                restrictFrame(f, fed, restricted);
+                calibrator.add(restricted);
+            });
+        if (calibrator.channels().empty())
+            throw std::runtime_error(
+                "'" + in +
+                "': no frame could be grouped by the chains' jump states (a fed "
+                "chain's state never measurable): nothing to calibrate");
+        for (const Chanspec& cs : calibrator.channels())
+        {
+            SplitterCapture cap;
+            cap.name = in;
+            cap.elements = fed;
+            cap.result = calibrator.solve(cs);
+            const auto& d = cap.result.diag;
+            const auto& cal = cap.result.calibration;
+            std::cout << "  " << cs.asString() << "          : " << d.frames << " frames over "
+                      << fixed(d.duration_s) << " s, common signal in "
+                      << fixed(100 * d.losShare, 0) << " %, phase residual "
+                      << fixed(d.residual_rad * kDeg, 2) << " deg RMS\n"
+                      << "  offsets          :";
+            for (size_t r = 1; r < cal.antennas(); ++r)
+                std::cout << " core " << array.coreOf(fed[r]) << " "
+                          << fixed(meanPhase(cal.phases_rad[r]) * kDeg, 1) << " deg";
+            std::cout << " (mean over subcarriers, against core " << array.coreOf(0) << ")\n";
+            for (const auto& st : d.chainStates)
+                std::cout << "    core " << array.coreOf(fed[st.antenna]) << " state "
+                          << int(st.state) << ": " << std::setw(6) << st.frames << " frames, delay "
+                          << signedFixed(st.delay_s * 1e9, 2) << " ns"
+                          << (st.reference
+                                  ? " (reference)"
+                                  : ", offset " + signedFixed(st.deltaDelay_s * 1e9, 2) + " ns " +
+                                        signedFixed(st.deltaPhase_rad * kDeg, 1) + " deg")
+                          << "\n";
+            if (d.chainStateChanges > 0)
+                std::cout << "    " << d.chainStateChanges << " state changes, "
+                          << d.unknownStateFrames << " frames left out\n";
+            for (const auto& w : cap.result.warnings)
+                std::cerr << "wifi-calibrate: warning: " << in << " " << cs.asString() << ": " << w
+                          << "\n";
+            allDetermined = allDetermined && cap.result.determined();
+            if (!run.reportDir.empty())
+                for (const auto& png : writeCalibrationReport(
+                         cap.result, run.reportDir + "/" + std::to_string(c + 1)))
+                    std::cout << "  report           : " << png << "\n";
+            byChannel[(uint32_t(cs.centerChannel) << 16) | cs.bandwidthMHz].push_back(
+                std::move(cap));
+        }
+    }
+
+    int rc = 0;
+    for (const auto& [key, captures] : byChannel)
+    {
+        std::vector<SplitterMergeNote> notes;
+        PhaseCalibration merged =
+            mergeSplitterCaptures(captures, array, run.maxDisagreement_rad, &notes);
+        std::cout << "\nChannel " << merged.chanspec.asString() << " (" << merged.antennas()
+                  << " elements, " << merged.subcarriers.size() << " subcarriers, "
+                  << captures.size() << " capture(s))\n";
+        for (const auto& n : notes)
+        {
+            std::cout << "  " << describeElement(array, n.element) << ": "
+                      << fixed(meanPhase(merged.phases_rad[n.element]) * kDeg, 1) << " deg from "
+                      << n.from;
+            for (const auto& a : n.agreeing) std::cout << ", agreeing with " << a;
+            if (!n.agreeing.empty())
+                std::cout << " (within " << fixed(n.maxDisagreement_rad * kDeg, 1) << " deg)";
+            std::cout << "\n";
+        }
+        const std::string path = PhaseCalibration::pathFor(run.outDir, array.name, merged.chanspec);
+        const size_t states = merged.chainStates.size();
+        const std::string policy = applyChainStatePolicy(merged, run.chainStates);
+        std::cout << "  chain states     : "
+                  << (policy.empty() ? std::to_string(states) + " jump states in the file" : policy)
+                  << "\n";
+        if (allDetermined || run.force)
+        {
+            merged.saveYamlFile(path);
+            std::cout << "  written          : " << path
+                      << (allDetermined ? "" : " (forced despite the warnings)") << "\n";
+        }
+        else
+        {
+            std::cout << "  NOT written      : " << path
+                      << " (a capture cannot determine its chains, see the warnings; --force "
+                         "writes it anyway)\n";
+            rc = 2;
+        }
+    }
+    return rc;
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -77,14 +373,20 @@ int main(int argc, char** argv)
                 "Phase calibration of a WiFi CSI receive array (per antenna and subcarrier) from "
                 "a rawlog recorded while the robot drove within a few metres of a transmitter at "
                 "a known position: expected bearings from the robot poses, suppression, "
-                "principal component, Levenberg-Marquardt refinement. Writes one YAML file per "
+                "principal component, Levenberg-Marquardt refinement; or, with "
+                "--static-splitter, from one or more captures through a splitter, each feeding "
+                "core 0 and some of the others (the fed chains detected or given with "
+                "--fed-cores), merged into one file. Writes one YAML file per "
                 "channel as OUT/<device>/ch<centre>_<bw>mhz.yaml. Exit codes: 0 written/OK, "
-                "1 error, 2 a drive that cannot determine the calibration (nothing written, see "
-                "--force), 3 --check found the calibration stale.",
+                "1 error (also: no usable frame, a chain no capture feeds, captures that "
+                "disagree), 2 a drive that cannot determine the calibration (nothing written, "
+                "see --force), 3 --check found the calibration stale.",
                 ' ', "0.1");
-            TCLAP::UnlabeledValueArg<std::string> argIn(
-                "input", "Rawlog with CObservationWiFiCSI (and odometry)", true, "", "IN.rawlog",
-                cmd);
+            TCLAP::UnlabeledMultiArg<std::string> argIn(
+                "input",
+                "Rawlog with CObservationWiFiCSI (and odometry); with --static-splitter one or "
+                "more, one per splitter wiring",
+                true, "IN.rawlog", cmd);
             TCLAP::ValueArg<std::string> argArray(
                 "a", "array", "Receive array: a geometry file, or a shipped one by name (rt-ac86u)",
                 true, "", "ARRAY.yaml", cmd);
@@ -122,9 +424,24 @@ int main(int argc, char** argv)
                 "f", "force", "Write the calibration even if the drive cannot determine it", cmd);
             TCLAP::SwitchArg argSplitter(
                 "", "static-splitter",
-                "Static calibration: one transmitter through a splitter and equal cables to "
-                "every antenna (no poses, no transmitter position)",
+                "Static calibration: one transmitter through a splitter and equal cables (no "
+                "poses, no transmitter position). Several inputs: one capture per wiring, each "
+                "feeding the array's element 0 (its first core) and some others (e.g. cores 0+1, "
+                "then 0+3); the chains each capture feeds are detected (a fed chain's phase "
+                "against element 0 is flat across the subcarriers, an unfed one hears the "
+                "transmitter through its own multipath) or given with --fed-cores; every "
+                "element must be fed by some capture. One file for all elements",
                 cmd);
+            TCLAP::MultiArg<std::string> argFed(
+                "", "fed-cores",
+                "With --static-splitter: the receive cores the splitter feeds in one capture "
+                "(e.g. 0,1), once per input in the inputs' order; instead of detecting them",
+                false, "C,C,..", cmd);
+            TCLAP::ValueArg<double> argDisagree(
+                "", "max-disagreement",
+                "With --static-splitter: captures feeding the same chain must agree on its "
+                "offset within this, in a jump state both saw [deg]",
+                false, 5.0, "DEG", cmd);
             TCLAP::ValueArg<std::string> argCheck(
                 "", "check",
                 "Do not calibrate: check whether this calibration (file or folder) still fits "
@@ -143,6 +460,13 @@ int main(int argc, char** argv)
                 "OUT/transmitters/<mac>/ch<c>_<bw>mhz.yaml; csi-bearings --calib OUT then reports "
                 "AoD for those transmitters",
                 cmd);
+            TCLAP::ValueArg<std::string> argChainStates(
+                "", "chain-states",
+                "Jump states in the file: auto (unless every state differs from its reference "
+                "by a delay alone, a sample slip whose offsets hold in every state: over the air "
+                "such states can't be matched to the file's and would withhold bearings), on, "
+                "off",
+                false, "auto", "auto|on|off", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
 
             cli::JoinedArgv a1(argc, argv, "--tx-position", 2);
@@ -152,6 +476,24 @@ int main(int argc, char** argv)
             // ---- Arguments that need no data ------------------------------------------------
             const bool splitter = argSplitter.isSet();
             const bool checking = argCheck.isSet();
+            const std::vector<std::string> inputs = argIn.getValue();
+            if (inputs.size() > 1 && !splitter)
+                throw std::invalid_argument(
+                    "several inputs are for --static-splitter (one capture per splitter "
+                    "wiring); a drive is one rawlog");
+            if (argFed.isSet() && !splitter)
+                throw std::invalid_argument("--fed-cores is for --static-splitter");
+            if (argFed.isSet() && argFed.getValue().size() != inputs.size())
+                throw std::invalid_argument(
+                    "--fed-cores given " + std::to_string(argFed.getValue().size()) +
+                    " times for " + std::to_string(inputs.size()) +
+                    " inputs: give it once per input, in the same order");
+            if (splitter && checking)
+                throw std::invalid_argument("--check needs a drive (not --static-splitter)");
+            const ChainStatePolicy chainStatePolicy =
+                chainStatePolicyFromString(argChainStates.getValue(), "--chain-states");
+            if (!(argDisagree.getValue() > 0 && argDisagree.getValue() < 180))
+                throw std::invalid_argument("--max-disagreement must be in (0, 180) degrees");
             if (!checking && !argOut.isSet())
                 throw std::invalid_argument("--out DIR is required (or --check CALIB)");
             if (!splitter && argTx.isSet() == argTxFile.isSet())
@@ -189,14 +531,36 @@ int main(int argc, char** argv)
             std::optional<CalibrationStore> checkStore;
             if (checking) checkStore = CalibrationStore::open(argCheck.getValue());
 
+            if (splitter)
+            {
+                SplitterRun run;
+                run.array = array;
+                run.arrayArg = argArray.getValue();
+                run.outDir = argOut.getValue();
+                run.reportDir = argReport.getValue();
+                run.onlyMac = onlyMac;
+                run.onlyChannel = onlyChannel;
+                run.pre = calibrationPreprocessOptions();
+                run.pre.minRssi_dBm = argMinRssi.getValue();
+                run.calibrator.mode = CalibrationMode::Splitter;
+                run.calibrator.segment_s = argSegment.getValue();
+                run.calibrator.robustScale = argRobust.getValue();
+                run.fedCores = argFed.getValue();
+                run.maxDisagreement_rad = argDisagree.getValue() / kDeg;
+                run.force = argForce.getValue();
+                run.chainStates = chainStatePolicy;
+                run.quiet = argQuiet.getValue();
+                return calibrateSplitter(inputs, run);
+            }
+            const std::string input = inputs.front();
+
             // ---- First pass: is the input usable? ------------------------------------------
             cli::Progress p1("wifi-calibrate: scanning", !argQuiet.getValue());
-            const RawlogSummary summary =
-                summarizeRawlog(argIn.getValue(), [&](double f) { p1.update(f); });
+            const RawlogSummary summary = summarizeRawlog(input, [&](double f) { p1.update(f); });
             p1.done(std::to_string(summary.csiFrames) + " CSI frames");
             if (summary.csiFrames == 0)
                 throw std::runtime_error(
-                    "'" + argIn.getValue() + "' holds no CObservationWiFiCSI observations");
+                    "'" + input + "' holds no CObservationWiFiCSI observations");
 
             // Which transmitters' frames to use, and where each one is.
             std::map<MacAddress, mrpt::math::TPoint2D> txAt;
@@ -204,8 +568,8 @@ int main(int argc, char** argv)
             std::set<MacAddress> use;
             if (onlyMac && !summary.transmitters.count(*onlyMac))
                 throw std::runtime_error(
-                    "transmitter " + onlyMac->asString() + " never appears in '" +
-                    argIn.getValue() + "'; it holds frames from:" + listMacs(summary));
+                    "transmitter " + onlyMac->asString() + " never appears in '" + input +
+                    "'; it holds frames from:" + listMacs(summary));
             if (splitter || argTx.isSet())
             {
                 if (onlyMac)
@@ -246,16 +610,7 @@ int main(int argc, char** argv)
             for (const auto& mac : use)
             {
                 const auto& src = summary.transmitters.at(mac);
-                if (src.maxRx > array.size())
-                    throw std::runtime_error(
-                        "frames from " + mac.asString() + " have " + std::to_string(src.maxRx) +
-                        " receive chains but the array '" + array.name + "' (" +
-                        argArray.getValue() + ") has " + std::to_string(array.size()) +
-                        " elements: wrong array file?");
-                if (src.maxRx < array.size())
-                    std::cerr << "wifi-calibrate: warning: frames from " << mac.asString()
-                              << " have " << src.maxRx << " receive chains, the array "
-                              << array.size() << " elements: using the first " << src.maxRx << "\n";
+                checkFrameShape(array, argArray.getValue(), mac, src);
                 for (const auto& [cs, n] : src.channels) channels[cs] += n;
             }
             if (onlyChannel)
@@ -331,7 +686,7 @@ int main(int argc, char** argv)
             CalibrationFrame frame;
             cli::Progress p2("wifi-calibrate: reading", !argQuiet.getValue());
             readRawlog(
-                argIn.getValue(),
+                input,
                 [&](const CObservationWiFiCSI& obs)
                 {
                     if (!use.count(obs.transmitter)) return;
@@ -378,8 +733,8 @@ int main(int argc, char** argv)
                 {}, [&](double f) { p2.update(f, std::to_string(accepted) + " frames"); });
             p2.done(std::to_string(accepted) + " frames");
 
-            std::cout << "Input      : " << argIn.getValue() << " (" << summary.csiFrames
-                      << " CSI frames, " << summary.odometryReadings << " odometry readings)\n"
+            std::cout << "Input      : " << input << " (" << summary.csiFrames << " CSI frames, "
+                      << summary.odometryReadings << " odometry readings)\n"
                       << "Array      : " << array.name << " (" << array.size() << " elements, "
                       << argArray.getValue() << ")\n"
                       << "Mode       : " << (splitter ? "static splitter" : "drive") << "\n"
@@ -432,6 +787,10 @@ int main(int argc, char** argv)
 
             // ---- Calibrate each channel ---------------------------------------------------
             int rc = 0;
+            if (calibrator.channels().empty())
+                throw std::runtime_error(
+                    "no frame could be grouped by the receive chains' jump states (a chain's "
+                    "state never measurable): nothing to calibrate");
             for (const Chanspec& cs : calibrator.channels())
             {
                 const ChannelCalibration res = calibrator.solve(cs);
@@ -491,9 +850,12 @@ int main(int argc, char** argv)
                     std::cerr << "wifi-calibrate: warning: " << cs.asString() << ": " << w << "\n";
                 const std::string path =
                     PhaseCalibration::pathFor(argOut.getValue(), array.name, cs);
+                PhaseCalibration toWrite = c;
+                const std::string policy = applyChainStatePolicy(toWrite, chainStatePolicy);
+                if (!policy.empty()) std::cout << "  chain states     : " << policy << "\n";
                 if (res.determined() || argForce.getValue())
                 {
-                    c.saveYamlFile(path);
+                    toWrite.saveYamlFile(path);
                     std::cout << "  written          : " << path
                               << (res.determined() ? "" : " (forced despite the warnings)") << "\n";
                 }

@@ -156,6 +156,7 @@ RawlogSummary summarizeRawlog(
             auto& src = s.transmitters[obs.transmitter];
             ++src.frames;
             ++src.channels[obs.chanspec.asString()];
+            if (obs.nRx > src.maxRx) src.rxCores = obs.rxCores;
             src.maxRx = std::max<unsigned>(src.maxRx, obs.nRx);
             src.minRssi = std::min<int>(src.minRssi, obs.rssi_dBm);
             src.maxRssi = std::max<int>(src.maxRssi, obs.rssi_dBm);

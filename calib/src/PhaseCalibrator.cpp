@@ -35,9 +35,27 @@ PreprocessOptions calibrationPreprocessOptions()
 }
 
 // ---------------------------------------------------------------------------------------------
-FramePreparer::FramePreparer(AntennaArray array, PreprocessOptions opts)
-    : pre_(opts, std::move(array), CalibrationStore())
+namespace
 {
+PreprocessOptions withoutStateTracking(PreprocessOptions o)
+{
+    o.trackChainStates = false;
+    return o;
+}
+}  // namespace
+
+FramePreparer::FramePreparer(AntennaArray array, PreprocessOptions opts)
+    : pre_(withoutStateTracking(opts), std::move(array), CalibrationStore()),
+      trackStates_(opts.trackChainStates),
+      stateOptions_(opts.chainStates)
+{
+}
+
+std::vector<const ChainStateTracker*> FramePreparer::chainStateTrackers() const
+{
+    std::vector<const ChainStateTracker*> out;
+    for (const auto& [key, t] : trackers_) out.push_back(&t);
+    return out;
 }
 
 RejectReason FramePreparer::common(const CObservationWiFiCSI& obs, CalibrationFrame& out)
@@ -53,8 +71,24 @@ RejectReason FramePreparer::common(const CObservationWiFiCSI& obs, CalibrationFr
     out.layout = clean_.layout;
     out.H = clean_.H;
     out.hasGeometry = false;
-    out.chainDelay_s = clean_.chainDelay_s;
-    out.chainState = clean_.chainState;
+    out.chainDelay_s.clear();
+    out.chainState.clear();
+    if (trackStates_ && clean_.nRx >= 2)
+    {
+        const Chanspec& cs = clean_.layout->chanspec;
+        const auto key = std::make_pair(
+            (uint32_t(cs.centerChannel) << 16) | cs.bandwidthMHz, unsigned(clean_.nRx));
+        auto it = trackers_.find(key);
+        if (it == trackers_.end())
+            it =
+                trackers_
+                    .emplace(
+                        key, ChainStateTracker(clean_.nRx, nullptr, stateOptions_, cs.bandwidthMHz))
+                    .first;
+        measureChainDelays(
+            clean_.H, clean_.nRx, clean_.layout->subcarriers, out.chainDelay_s, coherence_);
+        it->second.classify(out.chainDelay_s, coherence_, out.chainState);
+    }
     return r;
 }
 
@@ -78,6 +112,48 @@ bool removeChainStates(const PhaseCalibration& c, CalibrationFrame& f)
                     std::polar(1.0, w * f.layout->subcarriers[j] - st->deltaPhase_rad));
     }
     return all;
+}
+
+ChainStatePolicy chainStatePolicyFromString(const std::string& s, const std::string& what)
+{
+    if (s == "auto") return ChainStatePolicy::Auto;
+    if (s == "on") return ChainStatePolicy::Always;
+    if (s == "off") return ChainStatePolicy::Never;
+    throw std::invalid_argument(what + ": expected auto, on or off, got '" + s + "'");
+}
+
+std::string applyChainStatePolicy(PhaseCalibration& c, ChainStatePolicy policy, double maxPhase_rad)
+{
+    if (c.chainStates.empty() || policy == ChainStatePolicy::Always) return {};
+    double largest = 0;
+    for (const auto& st : c.chainStates) largest = std::max(largest, std::abs(st.deltaPhase_rad));
+    std::ostringstream o;
+    o.precision(1);
+    o << std::fixed;
+    if (policy == ChainStatePolicy::Never)
+        o << c.chainStates.size() << " jump states not written (--chain-states off)";
+    else if (largest <= maxPhase_rad)
+        o << "the " << c.chainStates.size()
+          << " jump states differ by a delay alone (phase at the centre within "
+          << largest * 180 / M_PI << " deg): not written, the offsets hold in every state "
+          << "(--chain-states on writes them)";
+    else
+        return {};
+    // Said in the file, so the bearing chain knows the states were seen and need nothing. What
+    // holds in every state is each chain's phase at the centre frequency and its ripple: the
+    // reference state's delay (a slope across subcarriers) is taken out of the phases, as a
+    // frame over the air sits in any state (and its multipath shifts the delay further).
+    c.chainStatesDelayOnly = policy == ChainStatePolicy::Auto;
+    if (c.chainStatesDelayOnly)
+        for (const auto& st : c.chainStates)
+        {
+            if (st.deltaDelay_s != 0 || st.antenna >= c.phases_rad.size()) continue;  // reference
+            auto& row = c.phases_rad[st.antenna];
+            for (size_t j = 0; j < row.size() && j < c.subcarriers.size(); ++j)
+                row[j] += 2 * M_PI * kSubcarrierSpacingHz * c.subcarriers[j] * st.delay_s;
+        }
+    c.chainStates.clear();
+    return o.str();
 }
 
 RejectReason FramePreparer::prepare(
@@ -191,12 +267,27 @@ void PhaseCalibrator::add(const CalibrationFrame& f)
     const unsigned n = f.nRx;
     const size_t nSub = f.layout->size();
     // A chain whose state this frame could not tell stays in its last known state (the states
-    // last seconds); before any is known the frame can't be grouped and is left out.
+    // last seconds); before any is known the frame can't be grouped and is left out. So is a
+    // frame whose delay lies far from that state's: it is in another state the classifier has
+    // not caught up with yet (it lags a switch by a few frames), and would pull the old
+    // state's offsets (by 1–2 ns on the muTrack captures' 12.5 ns states).
+    const double tolerance_s =
+        ChainStateOptions().tolerance_s * chainStateDelayScale(f.chanspec.bandwidthMHz);
     std::vector<uint8_t> chainState = f.chainState;
     for (size_t i = 0; i < chainState.size(); ++i)
         if (chainState[i] == kUnknownChainState)
         {
             if (i >= ch.lastStates.size() || ch.lastStates[i] == kUnknownChainState)
+            {
+                ++ch.unknownStateFrames;
+                return;
+            }
+            const auto last = ch.states.find({unsigned(i), ch.lastStates[i]});
+            if (last != ch.states.end() && last->second.frames > 0 && i < f.chainDelay_s.size() &&
+                std::isfinite(f.chainDelay_s[i]) &&
+                std::abs(
+                    f.chainDelay_s[i] - last->second.delaySum_s / double(last->second.frames)) >
+                    tolerance_s)
             {
                 ++ch.unknownStateFrames;
                 return;
@@ -644,6 +735,9 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
             c.gains_dB[i] =
                 10 * std::log10(std::max(ch.antennaPower[i], 1e-30) / ch.antennaPower[0]);
     }
+    // States are ~1/(4·bandwidth) apart (3 ns at 80 MHz, 12.5 ns at 20 MHz): so is the
+    // tolerance a frame's delay is matched to them with.
+    c.chainStateTolerance_s *= chainStateDelayScale(c.chanspec.bandwidthMHz);
     for (const auto& sd : d.chainStates)
     {
         ChainStateCalibration st;
@@ -663,7 +757,8 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
         w.push_back(
             "only " + std::to_string(ch.frames) + " usable frames (need " +
             std::to_string(opts_.minFrames) + "): record longer, or check the MAC and RSSI gate");
-    if (d.duration_s < opts_.minDuration_s)
+    // A static splitter recording needs frames, not time: nothing moves.
+    if (drive && d.duration_s < opts_.minDuration_s)
         w.push_back(
             "the recording lasts only " + fmt(d.duration_s) + " s (need " +
             fmt(opts_.minDuration_s, 0) + " s)");

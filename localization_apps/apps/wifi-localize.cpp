@@ -938,7 +938,8 @@ int main(int argc, char** argv)
                             " check that bearing_calibration was made on this channel and "
                             "bandwidth and that bearing_array has this receiver's antennas "
                             "in its port order (array mismatch: more receive chains than "
-                            "array elements)"};
+                            "array elements), with 'cores: [...]' when the router reports "
+                            "only some cores (core_mask)"};
                 }
                 if (nUnweighed > w.unweighed)
                     return {

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <array>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -270,7 +271,9 @@ int main(int argc, char** argv)
 
             // ---- pre-scan: channels and antenna counts must fit the array and calibration
             cli::Progress progress("csi-bearings", !argQuiet.getValue());
-            std::set<std::pair<uint16_t, unsigned>> shapes;
+            // Frames per (channel, receive cores): a channel is refused only when none of its
+            // shapes fits (the first frame of a transmitter may lack a core lost on the way).
+            std::map<uint16_t, std::map<std::vector<uint8_t>, uint64_t>> shapes;
             uint64_t csiTotal = 0;
             forEachRawlogObject(
                 argIn.getValue(),
@@ -281,7 +284,10 @@ int main(int argc, char** argv)
                         if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
                         {
                             ++csiTotal;
-                            shapes.emplace(c->chanspec.raw, c->nRx);
+                            std::vector<uint8_t> cores;
+                            for (unsigned i = 0; i < c->nRx; ++i)
+                                cores.push_back(uint8_t(c->coreOfRow(i)));
+                            ++shapes[c->chanspec.raw][cores];
                         }
                     };
                     if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
@@ -292,11 +298,30 @@ int main(int argc, char** argv)
                 [&](double f) { progress.update(f, "checking input"); });
             if (csiTotal == 0)
                 throw std::runtime_error("'" + argIn.getValue() + "' holds no CObservationWiFiCSI");
-            for (const auto& [raw, nRx] : shapes)
+            for (const auto& [raw, byCores] : shapes)
             {
                 const auto cs = Chanspec::decode(raw);
                 if (!cs) continue;
-                processor.preprocessor().checkCompatible(*cs, nRx);  // throws with a clear message
+                std::vector<std::pair<uint64_t, std::vector<uint8_t>>> ranked;
+                for (const auto& [cores, n] : byCores) ranked.emplace_back(n, cores);
+                std::sort(ranked.rbegin(), ranked.rend());
+                std::exception_ptr firstError;
+                for (const auto& [n, cores] : ranked)
+                {
+                    try
+                    {
+                        // Throws with a clear message.
+                        processor.preprocessor().checkCompatible(
+                            *cs, unsigned(cores.size()), cores);
+                        firstError = nullptr;
+                        break;
+                    }
+                    catch (...)
+                    {
+                        if (!firstError) firstError = std::current_exception();
+                    }
+                }
+                if (firstError) std::rethrow_exception(firstError);
             }
 
             // ---- processing
@@ -532,7 +557,13 @@ int main(int argc, char** argv)
                           << processor.preprocessor().chainStateChanges() << " changes";
                 const bool applied = std::any_of(
                     trackers.begin(), trackers.end(), [](auto* t) { return t->applies(); });
+                const bool delayOnly = std::any_of(
+                    trackers.begin(), trackers.end(),
+                    [](auto* t) { return t->delayOnlyCalibration(); });
                 std::cout << (applied ? " (corrected with the calibration's per-state offsets)"
+                              : delayOnly
+                                  ? " (reported only: its calibration found the states "
+                                    "differ by a delay alone, which the offsets hold through)"
                               : calib.empty() ? " (reported only: no calibration)"
                                               : " (reported only: the calibration holds no states; "
                                                 "wifi-calibrate makes one that does)")
@@ -560,6 +591,19 @@ int main(int argc, char** argv)
                 std::cout << "Images: " << imagesTotal << " PNG files in " << argImages.getValue()
                           << "\n";
             if (csv.is_open()) std::cout << "CSV   : " << argCsv.getValue() << "\n";
+            if (bearingsTotal == 0)
+            {
+                // No result is a failure a script must see, with the reason that dominated.
+                const size_t worst = size_t(
+                    std::max_element(rejected.begin() + 1, rejected.end()) - rejected.begin());
+                std::cerr << "csi-bearings: no bearing from the " << csiSeen << " CSI frames of '"
+                          << argIn.getValue() << "'";
+                if (rejected[worst] > 0)
+                    std::cerr << ": " << rejected[worst] << " rejected as '"
+                              << toString(RejectReason(worst)) << "' (see the summary above)";
+                std::cerr << "\n";
+                return cli::kExitNoBearings;
+            }
             return 0;
         });
 }

@@ -19,12 +19,12 @@ namespace
 
 AntennaArray parseArray(const mrpt::containers::yaml& doc, const std::string& where)
 {
-    if (!doc.isMap()) fail(where, "expected a map with keys name, description, elements");
+    if (!doc.isMap()) fail(where, "expected a map with keys name, description, elements, cores");
     for (const auto& kv : doc.asMap())
     {
         const std::string key = kv.first.as<std::string>();
-        if (key != "name" && key != "description" && key != "elements")
-            fail(where, "unknown key '" + key + "' (expected name, description, elements)");
+        if (key != "name" && key != "description" && key != "elements" && key != "cores")
+            fail(where, "unknown key '" + key + "' (expected name, description, elements, cores)");
     }
     AntennaArray a;
     if (!doc.has("name")) fail(where, "missing key 'name' (the device the geometry belongs to)");
@@ -63,6 +63,33 @@ AntennaArray parseArray(const mrpt::containers::yaml& doc, const std::string& wh
                                std::to_string(j));
     if (a.elements.size() > 8)
         fail(where, "more than 8 elements (Nexmon reports at most 8 chains)");
+    if (doc.has("cores"))
+    {
+        const auto& c = doc["cores"];
+        if (!c.isSequence() || c.asSequence().size() != a.elements.size())
+            fail(
+                where, "'cores' must list one receive core per element (" +
+                           std::to_string(a.elements.size()) + " numbers, e.g. [0, 1, 3])");
+        for (size_t i = 0; i < a.elements.size(); ++i)
+        {
+            int core = -1;
+            try
+            {
+                core = c.asSequence()[i].as<int>();
+            }
+            catch (const std::exception&)
+            {
+            }
+            if (core < 0 || core > 7)
+                fail(where, "cores[" + std::to_string(i) + "] is not a core number 0..7");
+            for (size_t j = 0; j < i; ++j)
+                if (a.cores[j] == unsigned(core))
+                    fail(
+                        where,
+                        "cores[" + std::to_string(i) + "] repeats core " + std::to_string(core));
+            a.cores.push_back(unsigned(core));
+        }
+    }
     return a;
 }
 }  // namespace
@@ -136,6 +163,12 @@ std::string AntennaArray::asYamlText() const
     if (!description.empty()) o << "description: " << description << "\n";
     o << "elements:\n";
     for (const auto& e : elements) o << "  - [" << e.x << ", " << e.y << "]\n";
+    if (!cores.empty())
+    {
+        o << "cores: [";
+        for (size_t i = 0; i < cores.size(); ++i) o << (i ? ", " : "") << cores[i];
+        o << "]\n";
+    }
     return o.str();
 }
 
@@ -147,6 +180,7 @@ AntennaArray AntennaArray::firstElements(size_t n) const
             std::to_string(n) + " requested");
     AntennaArray a = *this;
     a.elements.resize(n);
+    if (!a.cores.empty()) a.cores.resize(n);
     return a;
 }
 

@@ -88,10 +88,25 @@ std::vector<double> CObservationWiFiCSI::dataSubcarrierFrequencies() const
 // ---------------------------------------------------------------- serialization
 // Version 0: the BCM4366c0 fields. Version 1 (issue 13): + source, subcarrierIndices,
 // antennaRssi_dB, noiseFloor_dBm, agc_dB, scaledCsiFactor. Version 2 (issue 21): + chainDelay_ns,
-// chainState.
+// chainState. Version 3 (issue 54): + rxCores.
 uint8_t CObservationWiFiCSI::serializeGetVersion() const
 {
-    return 2;
+    return 3;
+}
+
+int CObservationWiFiCSI::rowOfCore(unsigned core) const
+{
+    if (rxCores.empty()) return core < nRx ? int(core) : -1;
+    for (size_t i = 0; i < rxCores.size() && i < nRx; ++i)
+        if (rxCores[i] == core) return int(i);
+    return -1;
+}
+
+std::string CObservationWiFiCSI::rowCoresAsString() const
+{
+    std::string s;
+    for (unsigned i = 0; i < nRx; ++i) s += (i ? ", " : "") + std::to_string(coreOfRow(i));
+    return s;
 }
 
 void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
@@ -109,6 +124,8 @@ void CObservationWiFiCSI::serializeTo(mrpt::serialization::CArchive& out) const
         << scaledCsiFactor;
     // version 2
     out << chainDelay_ns << chainState;
+    // version 3
+    out << rxCores;
 }
 
 void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
@@ -118,6 +135,7 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
         case 0:
         case 1:
         case 2:
+        case 3:
         {
             // Strings and vectors are read with a bound: a damaged length must not ask for
             // gigabytes (MRPT's own readers allocate whatever the file claims).
@@ -176,6 +194,20 @@ void CObservationWiFiCSI::serializeFrom(mrpt::serialization::CArchive& in, uint8
             {
                 readBoundedVector(in, chainDelay_ns, kMaxChains, kWhat);
                 readBoundedVector(in, chainState, kMaxChains, kWhat);
+            }
+            rxCores.clear();
+            if (version >= 3)
+            {
+                readBoundedVector(in, rxCores, kMaxChains, kWhat);
+                if (!rxCores.empty() && rxCores.size() != nRx)
+                    THROW_EXCEPTION_FMT(
+                        "CObservationWiFiCSI: stored receive cores list %u rows, the CSI has %u",
+                        unsigned(rxCores.size()), unsigned(nRx));
+                for (size_t i = 0; i < rxCores.size(); ++i)
+                    if (rxCores[i] >= kMaxChains || (i > 0 && rxCores[i] <= rxCores[i - 1]))
+                        THROW_EXCEPTION(
+                            "CObservationWiFiCSI: stored receive cores are not ascending core "
+                            "numbers below 8");
             }
         }
         break;
@@ -260,6 +292,8 @@ void CObservationWiFiCSI::getDescriptionAsText(std::ostream& o) const
     o << "  Shape                : " << int(nTx) << " tx x " << int(nRx) << " rx x " << nfft()
       << " bins (" << dataSubcarriers().size() << " data subcarriers), " << presentPairs() << "/"
       << int(nTx) * int(nRx) << " pairs present\n";
+    if (!rxCores.empty())
+        o << "  Receive cores        : " << rowCoresAsString() << " (rx i below is the i-th)\n";
     if (!maskedBins.empty())
     {
         o << "  Masked bins (k)      :";

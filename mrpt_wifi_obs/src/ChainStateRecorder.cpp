@@ -44,7 +44,10 @@ void ChainStateRecorder::record(CObservationWiFiCSI& frame)
             // Another device or too few antennas: the bearing chain reports it; the recorder
             // still reports the states, with ids of its own.
         }
-        it = trackers_.emplace(key, ChainStateTracker(frame.nRx, cal, options_)).first;
+        it = trackers_
+                 .emplace(
+                     key, ChainStateTracker(frame.nRx, cal, options_, frame.chanspec.bandwidthMHz))
+                 .first;
         channelNames_[key] = frame.chanspec.asString() + ", " + std::to_string(frame.nRx) +
                              " chains" + (cal ? ", calibration " + cal->sourcePath : "");
     }

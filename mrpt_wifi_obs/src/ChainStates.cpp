@@ -50,23 +50,38 @@ double peakOnGrid(
 
 /** The inter-chain delay from the cross spectrum z_k = Σ_m h_{m,i}(k)·h_{m,0}(k)^*, starting
  *  from the phase-slope estimate `slopeDelay_s`. Where that estimate sits on a strong lobe of
- *  the delay profile |Σ_k z_k·e^{j2π·Δf·k·τ}| (at least half the global peak within ±25 ns),
- *  the lobe's own peak near it (±3 ns) refines it: the slope's centroid stays with the main
- *  path under multipath, the peak adds precision. Otherwise (low SNR: the neighbouring
+ *  the delay profile |Σ_k z_k·e^{j2π·Δf·k·τ}| (at least half the global peak within ±25 ns at
+ *  80 MHz), the lobe's own peak near it (±3 ns) refines it: the slope's centroid stays with the
+ *  main path under multipath, the peak adds precision. Otherwise (low SNR: the neighbouring
  *  products are too noisy for the slope, which then strays by several ns) the global peak,
- *  where all subcarriers add coherently. */
+ *  where all subcarriers add coherently. The lobes, the states and so the windows are `scale`
+ *  (80/bandwidth) times wider at narrower bandwidths. */
 double crossSpectrumDelay(
-    const Eigen::MatrixXcf& products, const std::vector<int>& k, double slopeDelay_s)
+    const Eigen::MatrixXcf& products, const std::vector<int>& k, double slopeDelay_s, double scale)
 {
     const Eigen::VectorXcd z = products.cast<std::complex<double>>().colwise().sum().transpose();
     double globalPower = 0;
-    const double global = peakOnGrid(z, k, -25e-9, 1e-9, 51, &globalPower);
-    if (std::abs(slopeDelay_s) < 25e-9 &&
+    const double reach_s = 25e-9 * scale;
+    const double global = peakOnGrid(z, k, -reach_s, 1e-9 * scale, 51, &globalPower);
+    if (std::abs(slopeDelay_s) < reach_s &&
         crossSpectrumPower(z, k, slopeDelay_s) >= 0.5 * globalPower)
-        return peakOnGrid(z, k, slopeDelay_s - 3e-9, 0.5e-9, 13);
+        return peakOnGrid(z, k, slopeDelay_s - 3e-9 * scale, 0.5e-9 * scale, 13);
     return global;
 }
 }  // namespace
+
+double chainStateDelayScale(unsigned bandwidthMHz)
+{
+    return bandwidthMHz > 0 ? 80.0 / double(bandwidthMHz) : 1.0;
+}
+
+unsigned bandwidthOfSubcarriers(const std::vector<int>& k)
+{
+    int widest = 0;
+    for (int x : k) widest = std::max(widest, std::abs(x));
+    // 20 MHz spans |k| ≤ 32, 40 MHz ≤ 64, 80 MHz ≤ 128 (FFT halves of 64/128/256 bins).
+    return widest <= 32 ? 20u : widest <= 64 ? 40u : widest <= 128 ? 80u : 160u;
+}
 
 void measureChainDelays(
     const Eigen::Ref<const Eigen::MatrixXcf>& H, unsigned nRx, const std::vector<int>& k,
@@ -76,6 +91,7 @@ void measureChainDelays(
     coherence.assign(nRx, nRx > 0 ? 1.0 : 0.0);
     if (nRx < 2 || H.rows() % nRx != 0 || H.cols() < 2) return;
     const Eigen::Index streams = H.rows() / Eigen::Index(nRx);
+    const double scale = chainStateDelayScale(bandwidthOfSubcarriers(k));
     Eigen::MatrixXcf products(streams, H.cols());
     for (unsigned i = 1; i < nRx; ++i)
     {
@@ -100,7 +116,7 @@ void measureChainDelays(
         // cross spectrum's delay profile, where the slope strays by several ns.
         constexpr double kSlopeCoherence = 0.97;
         if (coherence[i] < kSlopeCoherence)
-            delays_s[i] = crossSpectrumDelay(products, k, delays_s[i]);
+            delays_s[i] = crossSpectrumDelay(products, k, delays_s[i], scale);
     }
 }
 
@@ -169,14 +185,24 @@ std::string ns(double s)
 }
 }  // namespace
 
-ChainStateTracker::ChainStateTracker(unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o)
+ChainStateTracker::ChainStateTracker(
+    unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o, unsigned bandwidthMHz)
     : filters_(nRx), opts_(o), states_(nRx), last_(nRx, kUnknownChainState), changes_(nRx, 0)
 {
+    if (bandwidthMHz == 0 && cal) bandwidthMHz = cal->chanspec.bandwidthMHz;
+    bandwidthMHz_ = bandwidthMHz > 0 ? bandwidthMHz : 80;
+    // States and per-frame noise both scale with 1/bandwidth: one set of windows for all.
+    const double scale = chainStateDelayScale(bandwidthMHz_);
+    opts_.tolerance_s *= scale;
+    opts_.measurementSigma_s *= scale;
+    opts_.frameTolerance_s *= scale;
+    outlierSpan_s_ = 60e-9 * scale;
     calibrated_ = cal != nullptr;
     if (!cal) return;
     calibrationName_ =
         cal->sourcePath.empty() ? cal->device + " " + cal->chanspec.asString() : cal->sourcePath;
     stateAware_ = !cal->chainStates.empty();
+    delayOnlyCalibration_ = cal->chainStatesDelayOnly;
     if (stateAware_) opts_.tolerance_s = cal->chainStateTolerance_s;
     for (const auto& st : cal->chainStates)
     {
@@ -245,7 +271,8 @@ ChainStateInfo& ChainStateTracker::newState(unsigned chain, double delay_s, Chai
     auto& b = filters_[chain].belief;
     for (double& v : b) v *= 0.05;
     b.push_back(0.95);
-    if (origin == ChainStateOrigin::Assumed)
+    // A calibration that saw only delay-only states needs none: nothing to warn about.
+    if (origin == ChainStateOrigin::Assumed && !delayOnlyCalibration_)
         notices_.push_back(
             "chain " + std::to_string(chain) + ": the calibration '" + calibrationName_ +
             "' holds no jump states; the first state seen (" + ns(delay_s) +
@@ -315,7 +342,7 @@ uint8_t ChainStateTracker::classifyChain(unsigned i, double d, bool valid)
     {
         // Cauchy core (the per-frame errors are heavy-tailed) plus a uniform floor.
         const double scale = opts_.measurementSigma_s;
-        const double tail = opts_.outlierShare / 60e-9;
+        const double tail = opts_.outlierShare / outlierSpan_s_;
         for (size_t s = 0; s < n; ++s)
         {
             const double z = (d - list[s].delay_s) / scale;

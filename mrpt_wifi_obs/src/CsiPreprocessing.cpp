@@ -32,6 +32,8 @@ const char* toString(RejectReason r)
             return "one receive antenna: no angle of arrival (CSI still recorded)";
         case RejectReason::UnknownChainState:
             return "a receive chain in a jump state the calibration lacks (or unmeasurable)";
+        case RejectReason::MissingCore:
+            return "a receive core the array reads is not in the frame";
     }
     return "?";
 }
@@ -269,7 +271,7 @@ CsiPreprocessor::ChannelCache& CsiPreprocessor::cacheFor(
                     std::polar(gain, -c.calibration->phaseAt(i, c.layout->subcarriers[j])));
         }
     }
-    c.states = ChainStateTracker(nRx, c.calibration, options_.chainStates);
+    c.states = ChainStateTracker(nRx, c.calibration, options_.chainStates, cs.bandwidthMHz);
     return caches_.emplace(key, std::move(c)).first->second;
 }
 
@@ -299,18 +301,62 @@ const CsiPreprocessor::TransmitterCache& CsiPreprocessor::transmitterCacheFor(
     return txCaches_[key] = std::move(c);
 }
 
-void CsiPreprocessor::checkCompatible(const Chanspec& cs, unsigned nRx)
+RejectReason CsiPreprocessor::elementRows(
+    const CObservationWiFiCSI& in, std::vector<unsigned>& rows) const
 {
-    if (nRx > rxArray_.size())
-        throw std::invalid_argument(
-            "the CSI has " + std::to_string(nRx) + " receive chains but the array '" +
-            rxArray_.name + "'" +
-            (rxArray_.sourcePath.empty() ? "" : " (" + rxArray_.sourcePath + ")") + " has " +
-            std::to_string(rxArray_.size()) + " elements");
+    rows.clear();
+    // Without `cores` in the array file, element i reads core i, and a frame uses as many
+    // elements as it has rows (a receiver with fewer chains than the array).
+    const size_t n = rxArray_.cores.empty() ? in.nRx : rxArray_.size();
+    if (n > rxArray_.size()) return RejectReason::ArrayMismatch;
+    for (size_t i = 0; i < n; ++i)
+    {
+        const int row = in.rowOfCore(rxArray_.coreOf(i));
+        if (row < 0) return RejectReason::MissingCore;
+        rows.push_back(unsigned(row));
+    }
+    return RejectReason::Accepted;
+}
+
+std::string CsiPreprocessor::coreMismatchMessage(const CObservationWiFiCSI& in) const
+{
+    std::vector<unsigned> rows;
+    const RejectReason r = elementRows(in, rows);
+    if (r == RejectReason::Accepted) return {};
+    std::string arrayCores;
+    for (size_t i = 0; i < (rxArray_.cores.empty() ? in.nRx : rxArray_.size()); ++i)
+        arrayCores += (i ? ", " : "") + std::to_string(rxArray_.coreOf(i));
+    const std::string array = "the array '" + rxArray_.name + "'" +
+                              (rxArray_.sourcePath.empty() ? "" : " (" + rxArray_.sourcePath + ")");
+    if (r == RejectReason::ArrayMismatch)
+        return "the CSI has " + std::to_string(in.nRx) + " receive chains (cores " +
+               in.rowCoresAsString() + ") but " + array + " has " +
+               std::to_string(rxArray_.size()) +
+               " elements; give an array with one element per core, or name the cores it "
+               "reads with 'cores: [...]' in its file";
+    return "the CSI holds receive cores " + in.rowCoresAsString() + " but " + array +
+           " reads cores " + arrayCores +
+           (rxArray_.cores.empty()
+                ? " (element i = core i); a router with only some cores enabled (core mask) "
+                  "needs an array file with one element per enabled core and 'cores: [" +
+                      in.rowCoresAsString() + "]'"
+                : "; check the array file's 'cores' against the router's core mask");
+}
+
+void CsiPreprocessor::checkCompatible(
+    const Chanspec& cs, unsigned nRx, const std::vector<uint8_t>& rxCores)
+{
+    CObservationWiFiCSI shape;
+    shape.nRx = uint8_t(nRx);
+    shape.rxCores = rxCores;
+    const std::string mismatch = coreMismatchMessage(shape);
+    if (!mismatch.empty()) throw std::invalid_argument(mismatch);
+    std::vector<unsigned> rows;
+    elementRows(shape, rows);
     CObservationWiFiCSI standard;
     standard.chanspec = cs;
     // Throws for an unsupported bandwidth, then CalibrationError for a mismatching calibration.
-    const auto& c = cacheFor(layoutFor(standard), nRx);
+    const auto& c = cacheFor(layoutFor(standard), unsigned(rows.size()));
     if (options_.requireCalibration && !c.calibration)
         throw CalibrationError(
             "no phase calibration for device '" + rxArray_.name + "' on " + cs.asString() +
@@ -352,13 +398,15 @@ double CsiPreprocessor::estimatePhaseSlope(
 RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& out)
 {
     if (in.rssi_dBm != 0 && in.rssi_dBm < options_.minRssi_dBm) return RejectReason::LowRssi;
-    if (in.nRx > rxArray_.size()) return RejectReason::ArrayMismatch;
-    if (in.nRx < 2 && !options_.acceptSingleAntenna) return RejectReason::SingleAntenna;
-    const unsigned nRx = in.nRx;
+    const RejectReason fits = elementRows(in, rows_);
+    if (fits != RejectReason::Accepted) return fits;
+    const auto& elementRow = rows_;
+    const auto nRx = unsigned(elementRow.size());
+    if (nRx < 2 && !options_.acceptSingleAntenna) return RejectReason::SingleAntenna;
     const unsigned nfft = in.nfft();
     const unsigned bw = in.chanspec.bandwidthMHz;
     if (bw != 20 && bw != 40 && bw != 80 && bw != 160) return RejectReason::UnsupportedChannel;
-    if (in.csi.size() < size_t(in.nTx) * nRx * nfft) return RejectReason::NoCompleteStream;
+    if (in.csi.size() < size_t(in.nTx) * in.nRx * nfft) return RejectReason::NoCompleteStream;
     ChannelCache& cache = cacheFor(layoutFor(in), nRx);
     if (options_.requireCalibration && !cache.calibration) return RejectReason::NoCalibration;
     const SubcarrierLayout& layout = *cache.layout;
@@ -372,12 +420,12 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
         bool complete = true, dead = false;
         for (unsigned i = 0; i < nRx && complete; ++i)
         {
-            if (!in.isPresent(m, i))
+            if (!in.isPresent(m, elementRow[i]))
             {
                 complete = false;
                 break;
             }
-            const auto* p = in.pair(m, i);
+            const auto* p = in.pair(m, elementRow[i]);
             float energy = 0;
             for (uint16_t b : layout.bins) energy += std::norm(p[b]);
             if (!(energy > 0) || !std::isfinite(energy)) dead = true;
@@ -411,7 +459,7 @@ RejectReason CsiPreprocessor::process(const CObservationWiFiCSI& in, CleanCsi& o
     for (unsigned s = 0; s < out.nTx; ++s)
         for (unsigned i = 0; i < nRx; ++i)
         {
-            const auto* p = in.pair(out.streamIndex[s], i);
+            const auto* p = in.pair(out.streamIndex[s], elementRow[i]);
             auto row = out.H.row(Eigen::Index(s * nRx + i));
             for (size_t j = 0; j < nSub; ++j) row[Eigen::Index(j)] = p[layout.bins[j]];
             if (cache.hasSignCorrection)

@@ -101,7 +101,8 @@ PhaseCalibration PhaseCalibration::fromYamlText(
         "transmitter",
         "aod_residual_rad",
         "chain_states",
-        "chain_state_tolerance_ns"};
+        "chain_state_tolerance_ns",
+        "chain_states_delay_only"};
     for (const auto& kv : doc.asMap())
     {
         const std::string key = kv.first.as<std::string>();
@@ -120,7 +121,8 @@ PhaseCalibration PhaseCalibration::fromYamlText(
         for (const char* k : {"role", "transmitter", "aod_residual_rad"})
             if (doc.has(k)) fail(w, std::string("key '") + k + "' needs version 2");
     if (version < 3)
-        for (const char* k : {"chain_states", "chain_state_tolerance_ns"})
+        for (const char* k :
+             {"chain_states", "chain_state_tolerance_ns", "chain_states_delay_only"})
             if (doc.has(k)) fail(w, std::string("key '") + k + "' needs version 3");
 
     PhaseCalibration c;
@@ -175,6 +177,9 @@ PhaseCalibration PhaseCalibration::fromYamlText(
     if (doc.has("chain_state_tolerance_ns"))
         c.chainStateTolerance_s =
             asValue<double>(doc["chain_state_tolerance_ns"], "chain_state_tolerance_ns", w) * 1e-9;
+    if (doc.has("chain_states_delay_only"))
+        c.chainStatesDelayOnly =
+            asValue<bool>(doc["chain_states_delay_only"], "chain_states_delay_only", w);
     if (doc.has("chain_states"))
     {
         const auto& states = doc["chain_states"];
@@ -299,7 +304,7 @@ std::string PhaseCalibration::asYamlText() const
          "# exp(-j*phases_rad[i][k]) * 10^(-gains_db[i]/20) after the sub-band sign correction.\n";
     o << "format: mrpt_wifi_phase_calibration\n";
     // The lowest version that holds the content, so older readers still read what they can.
-    o << "version: " << (chainStates.empty() ? 2 : kFormatVersion) << "\n";
+    o << "version: " << (chainStates.empty() && !chainStatesDelayOnly ? 2 : kFormatVersion) << "\n";
     if (role == Role::Transmitter)
         o << "role: transmitter\n"
           << "transmitter: '" << transmitter.asString() << "'\n"
@@ -327,6 +332,9 @@ std::string PhaseCalibration::asYamlText() const
         for (size_t i = 0; i < gains_dB.size(); ++i) o << (i ? ", " : "") << gains_dB[i];
         o << "]\n";
     }
+    if (chainStatesDelayOnly)
+        o << "# the recording's jump states differ by a delay alone: the phases hold in each\n"
+             "chain_states_delay_only: true\n";
     if (!chainStates.empty())
     {
         o << "# jump states: antenna i in state s is first multiplied by\n"

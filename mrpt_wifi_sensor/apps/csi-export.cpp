@@ -48,6 +48,11 @@ void writeJsonLine(std::FILE* f, const CObservationWiFiCSI& o)
     for (size_t i = 0; i < o.antennaRssi_dB.size(); ++i)
         std::fprintf(f, "%s%.9g", i ? "," : "", o.antennaRssi_dB[i]);
     std::fputc(']', f);
+    // Which receive core each rx row is (a router with only some cores enabled): always given,
+    // so a reader never has to guess.
+    std::fputs(",\"rx_cores\":[", f);
+    for (unsigned rx = 0; rx < o.nRx; ++rx) std::fprintf(f, "%s%u", rx ? "," : "", o.coreOfRow(rx));
+    std::fputc(']', f);
     if (!std::isnan(o.noiseFloor_dBm)) std::fprintf(f, ",\"noise_floor\":%.9g", o.noiseFloor_dBm);
     if (!std::isnan(o.agc_dB)) std::fprintf(f, ",\"agc\":%.9g", o.agc_dB);
     if (o.scaledCsiFactor != 0.0) std::fprintf(f, ",\"csi_scale\":%.17g", o.scaledCsiFactor);
@@ -263,6 +268,11 @@ int main(int argc, char** argv)
                     total.incomplete);
             }
             std::cerr << summary.asString() << "\n";
+            if (rc == 0 && summary.frames == 0)
+            {
+                std::cerr << "csi-export: no CSI frame in '" << argIn.getValue() << "'\n";
+                return cli::kExitNoMatchingFrames;
+            }
             return conversionExitStatus(rc, summary, "csi-export");
         });
 }

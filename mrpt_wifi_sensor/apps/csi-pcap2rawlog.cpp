@@ -125,6 +125,13 @@ int main(int argc, char** argv)
                       << "Output: " << argOut.getValue() << " (" << written
                       << " CObservationWiFiCSI" << (rc ? ", kept valid up to the fault" : "")
                       << ")\n";
+            if (rc == 0 && written == 0)
+            {
+                // Nothing to work with is a failure a script must see.
+                std::cerr << program << ": no CSI frame in '" << argIn.getValue()
+                          << "' (the summary above says what was read and why it was skipped)\n";
+                return cli::kExitNoMatchingFrames;
+            }
             return conversionExitStatus(rc, summary, program);
         });
 }

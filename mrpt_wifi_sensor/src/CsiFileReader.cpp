@@ -5,6 +5,7 @@
 
 #include <array>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -18,17 +19,28 @@ void readCapture(
     const std::function<void(double)>& onProgress, CsiFileReadSummary& summary)
 {
     PcapReader reader(path, options.udpPort);
-    CsiFrameAssembler assembler(
-        options.assembler,
-        [&](CObservationWiFiCSI::Ptr&& obs)
+    // A frame reordered on the way (late) is emitted after a newer one: hold frames by
+    // timestamp until no open frame can be older, so they come out in time order.
+    std::multimap<mrpt::Clock::time_point, CObservationWiFiCSI::Ptr> held;
+    const auto release = [&](mrpt::Clock::time_point upTo)
+    {
+        while (!held.empty() && held.begin()->first <= upTo)
         {
             ++summary.frames;
-            onFrame(std::move(obs));
-        });
+            onFrame(std::move(held.begin()->second));
+            held.erase(held.begin());
+        }
+    };
+    CsiFrameAssembler assembler(
+        options.assembler,
+        [&](CObservationWiFiCSI::Ptr&& obs) { held.emplace(obs->timestamp, std::move(obs)); });
+    const auto timeout = std::chrono::duration_cast<mrpt::Clock::duration>(
+        std::chrono::duration<double>(options.assembler.frameTimeout_s));
     ProgressThrottle progress(onProgress);
     const auto finish = [&]
     {
         assembler.flushAll();
+        release(mrpt::Clock::time_point::max());
         summary.pcap = reader.stats();
         summary.assembler = assembler.stats();
     };
@@ -39,6 +51,7 @@ void readCapture(
         {
             // Capture time drives the timeout, so a replay assembles exactly as live capture.
             assembler.flushExpired(d.timestamp);
+            release(d.timestamp - timeout);  // every open frame is younger
             nexmon::RejectReason why{};
             if (!assembler.push(d.payload, d.payloadLength, d.timestamp, d.sourceAddress, &why))
             {

@@ -3,9 +3,11 @@
 #include <mrpt_wifi/sensor/CsiFrameAssembler.h>
 
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace mrpt_wifi
 {
@@ -15,10 +17,31 @@ namespace
  * rather than a transmitter that restarted its sequence. */
 constexpr uint16_t kLateWindow = 64;
 constexpr uint16_t kSequenceModulo = 4096;
+/** Receptions of one transmitter assembled at once (a frame, its retry, a late one). */
+constexpr size_t kMaxOpenFrames = 4;
+/** Emitted frames remembered per transmitter to tell a late repeat from a retry. */
+constexpr size_t kRecentFrames = 16;
 
 unsigned highestBitPlusOne(unsigned mask)
 {
     return mask ? 32u - unsigned(__builtin_clz(mask)) : 0u;
+}
+
+/** A fingerprint of a pair's CSI words, to tell a repeated datagram (same words) from another
+ *  reception of the frame (an 802.11 retry: noise alone changes every word). 32 words spread
+ *  over the band, FNV-1a a word at a time, keep assembly at its speed (bench_nexmon_decode);
+ *  hashing every byte of an 80 MHz pair cost a sixth of it. */
+uint64_t wordsFingerprint(const uint8_t* words, unsigned nfft)
+{
+    const unsigned step = std::max(1u, nfft / 32);
+    uint64_t h = 1469598103934665603ull;
+    for (unsigned i = 0; i < nfft; i += step)
+    {
+        uint32_t w;
+        std::memcpy(&w, words + 4 * i, 4);
+        h = (h ^ w) * 1099511628211ull;  // a word at a time: the words differ, not their bytes
+    }
+    return h;
 }
 
 /** Bits of CObservationWiFiCSI::presentMask for every core × stream in the two masks. */
@@ -139,8 +162,15 @@ std::string CsiFrameAssemblerStats::asString() const
         if (rejected[i])
             o << " [" << nexmon::toString(nexmon::RejectReason(i)) << ": " << rejected[i] << "]";
     o << "; frames " << frames() << " (complete " << framesComplete << ", incomplete "
-      << framesIncomplete << ", missing pairs " << missingPairs << "); duplicates " << duplicates
-      << ", reordered (late) " << lateDatagrams;
+      << framesIncomplete << ", missing pairs " << missingPairs << ")";
+    if (coresSeen)
+    {
+        o << " on receive cores ";
+        for (unsigned c = 0, n = 0; c < 8; ++c)
+            if ((coresSeen >> c) & 1u) o << (n++ ? ", " : "") << c;
+    }
+    o << "; retries kept " << retries << ", late frames kept " << lateFrames
+      << ", duplicates dropped " << duplicates << ", late datagrams dropped " << lateDatagrams;
     return o.str();
 }
 
@@ -154,9 +184,9 @@ CsiFrameAssembler::CsiFrameAssembler(const CsiFrameAssemblerOptions& options, Fr
 
 size_t CsiFrameAssembler::pendingFrames() const
 {
-    return size_t(std::count_if(
-        transmitters_.begin(), transmitters_.end(),
-        [](const auto& kv) { return bool(kv.second.obs); }));
+    size_t n = 0;
+    for (const auto& kv : transmitters_) n += kv.second.open.size();
+    return n;
 }
 
 bool CsiFrameAssembler::push(
@@ -180,36 +210,66 @@ bool CsiFrameAssembler::push(
     if (it == transmitters_.end())
     {
         if (transmitters_.size() >= options_.maxPendingTransmitters) evictStalest();
-        it = transmitters_.emplace(h.transmitter, Pending{}).first;
+        it = transmitters_.emplace(h.transmitter, Transmitter{}).first;
     }
-    Pending& p = it->second;
-    const bool sameFrame =
-        p.obs && p.sequenceControl == h.sequenceControl && p.chanspecRaw == h.chanspec.raw &&
-        p.firmwareCounter == h.firmwareCounter && p.obs->headerVariant == h.variant;
-    if (!sameFrame)
+    Transmitter& t = it->second;
+    t.lastActivity = arrival;
+
+    const FrameKey key{h.sequenceControl, h.chanspec.raw, h.firmwareCounter, h.variant};
+    const auto bit = uint8_t(h.stream * CObservationWiFiCSI::kMaxChains + h.core);
+    const uint64_t hash = wordsFingerprint(data + nexmon::csiOffset(), h.nfft());
+
+    // The newest open reception of this frame, if any.
+    OpenFrame* frame = nullptr;
+    for (auto f = t.open.rbegin(); f != t.open.rend() && !frame; ++f)
+        if (f->key == key) frame = &*f;
+    bool retry = false;
+    if (frame)
     {
-        // A datagram a little behind the newest sequence number belongs to a frame that was
-        // already emitted: count it, drop it. Anything else starts this transmitter's next frame.
-        const bool haveReference = p.obs || p.hasEmitted;
-        const uint16_t reference = p.obs ? uint16_t(p.sequenceControl >> 4) : p.lastEmittedSequence;
-        const uint16_t behind = uint16_t((reference - h.sequenceNumber()) & (kSequenceModulo - 1));
-        // The Raspberry Pi's firmware (BCM43455c0) and other non-4366c0 chips may report the
-        // same sequence number for every frame: a pair the last frame already had then starts
-        // a new frame rather than being late.
-        const uint64_t bit = uint64_t(1) << (h.stream * CObservationWiFiCSI::kMaxChains + h.core);
-        const bool repeatsSequence =
-            h.chip != nexmon::Chip::BCM4366c0 && !p.obs && behind == 0 && (p.lastEmittedMask & bit);
-        if (haveReference && behind < kLateWindow && !(p.obs && behind == 0) && !repeatsSequence)
+        const int seen = frame->pairs.compare(bit, hash);
+        if (seen == 1)
         {
-            ++stats_.lateDatagrams;
-            p.streamsSeen |= uint8_t(1u << h.stream);  // still teaches what the AP sends
+            ++stats_.duplicates;
             return true;
         }
-        if (p.obs) emit(p);
-        startFrame(p, h, arrival, source);
+        retry = seen == 2;
+    }
+    else
+    {
+        // A frame emitted lately: its pair again is a duplicate or a retry; a pair it lacked
+        // comes too late to join it.
+        for (size_t age = 1; age <= t.recentKeys.size(); ++age)
+        {
+            // Newest first.
+            const size_t r = (t.recentNext + t.recentKeys.size() - age) % t.recentKeys.size();
+            if (!(t.recentKeys[r] == key)) continue;
+            const int seen = t.recentPairs[r].compare(bit, hash);
+            if (seen == 1)
+            {
+                ++stats_.duplicates;
+                return true;
+            }
+            if (seen == 0)
+            {
+                ++stats_.lateDatagrams;
+                t.streamsSeen |= uint8_t(1u << h.stream);  // still teaches what the AP sends
+                t.coresSeen |= uint8_t(1u << h.core);
+                return true;
+            }
+            retry = true;
+            break;
+        }
+    }
+    // Firmware other than the 4366c0 may give every frame the same sequence number (the Pi's
+    // BCM43455c0): a new frame there, not a retry.
+    if (retry && h.chip == nexmon::Chip::BCM4366c0) ++stats_.retries;
+    if (!frame || retry)
+    {
+        frame = &startFrame(t, key, h, arrival, source);
+        if (retry) frame->obs->fragmentNumber = h.fragmentNumber();
     }
 
-    auto& obs = *p.obs;
+    auto& obs = *frame->obs;
     if (h.core >= obs.nRx)
     {
         // A core the frame's first datagram did not announce (UbiLocate masks disagreeing
@@ -222,48 +282,52 @@ bool CsiFrameAssembler::push(
         obs.nTx = uint8_t(h.stream + 1);
         obs.csi.resize(size_t(obs.nTx) * obs.nRx * obs.nfft());
     }
-    if (obs.isPresent(h.stream, h.core))
-    {
-        if (h.chip == nexmon::Chip::BCM4366c0)
-        {
-            ++stats_.duplicates;
-            return true;
-        }
-        // Non-4366c0 firmware repeating the sequence number: this pair starts the next frame.
-        emit(p);
-        startFrame(p, h, arrival, source);
-    }
-    auto& cur = *p.obs;
-    if (h.stream >= cur.nTx)
-    {
-        cur.nTx = uint8_t(h.stream + 1);
-        cur.csi.resize(size_t(cur.nTx) * cur.nRx * cur.nfft());
-    }
-    nexmon::decodeWords(h.chip, data + nexmon::csiOffset(), h.nfft(), cur.pair(h.stream, h.core));
-    cur.setPresent(h.stream, h.core);
-    p.streamsSeen |= uint8_t(1u << h.stream);
+    nexmon::decodeWords(h.chip, data + nexmon::csiOffset(), h.nfft(), obs.pair(h.stream, h.core));
+    obs.setPresent(h.stream, h.core);
+    frame->pairs.present |= uint64_t(1) << bit;
+    frame->pairs.hash[bit] = hash;
+    t.streamsSeen |= uint8_t(1u << h.stream);
+    t.coresSeen |= uint8_t(1u << h.core);
+    stats_.coresSeen |= uint8_t(1u << h.core);
     ++stats_.accepted;
-    if (frameComplete(p)) emit(p);
+    if (frameComplete(t, *frame)) emit(t, size_t(frame - t.open.data()));
     return true;
 }
 
-void CsiFrameAssembler::startFrame(
-    Pending& p, const nexmon::DatagramHeader& h, mrpt::Clock::time_point arrival,
-    const std::string& source)
+CsiFrameAssembler::OpenFrame& CsiFrameAssembler::startFrame(
+    Transmitter& t, const FrameKey& key, const nexmon::DatagramHeader& h,
+    mrpt::Clock::time_point arrival, const std::string& source)
 {
-    p.sequenceControl = h.sequenceControl;
-    p.chanspecRaw = h.chanspec.raw;
-    p.firmwareCounter = h.firmwareCounter;
-    p.firstArrival = arrival;
-    const auto chipCoreMask = uint8_t((1u << nexmon::chipCores(h.chip)) - 1);
-    p.expectedCores = h.coreMask ? uint8_t(h.coreMask & options_.coreMask)
-                                 : uint8_t(options_.coreMask & chipCoreMask);
+    // Open frames behind the new one (or the same frame, for a retry) are done. One ahead of
+    // it stays open: the new frame is a late one, reordered on the way.
+    const auto ahead = [&](uint16_t sequenceNumber)
+    {
+        const auto d = uint16_t((sequenceNumber - h.sequenceNumber()) & (kSequenceModulo - 1));
+        return d > 0 && d < kLateWindow;
+    };
+    for (size_t i = t.open.size(); i-- > 0;)
+        if (!ahead(uint16_t(t.open[i].key.sequenceControl >> 4))) emit(t, i);
+    if (t.hasNewest && ahead(t.newestSequence))
+        ++stats_.lateFrames;
+    else
+    {
+        t.newestSequence = h.sequenceNumber();
+        t.hasNewest = true;
+    }
+    if (t.open.size() >= kMaxOpenFrames) emit(t, 0);
+
     if (h.streamMask)
     {
-        p.streamsSeen |= uint8_t(h.streamMask & options_.streamMask);
-        p.streamsKnown = true;
+        t.streamsSeen |= uint8_t(h.streamMask & options_.streamMask);
+        t.shapeKnown = true;
     }
-    p.streamsSeen |= uint8_t(1u << h.stream);
+    OpenFrame f;
+    f.key = key;
+    f.firstArrival = arrival;
+    f.headerCores = uint8_t(h.coreMask & options_.coreMask);
+    const auto chipCoreMask = uint8_t((1u << nexmon::chipCores(h.chip)) - 1);
+    const uint8_t layoutCores =
+        f.headerCores ? f.headerCores : uint8_t(options_.coreMask & chipCoreMask);
 
     auto obs = CObservationWiFiCSI::Create();
     obs->timestamp = arrival;
@@ -280,36 +344,84 @@ void CsiFrameAssembler::startFrame(
     obs->firmwareCounter = h.firmwareCounter;
     obs->headerVariant = h.variant;
     obs->routerAddress = source;
-    obs->resize(highestBitPlusOne(p.streamsSeen), highestBitPlusOne(p.expectedCores), h.nfft());
-    p.obs = std::move(obs);
+    obs->resize(
+        std::max(1u, highestBitPlusOne(t.streamsSeen | uint8_t(1u << h.stream))),
+        highestBitPlusOne(layoutCores), h.nfft());
+    f.obs = std::move(obs);
+    t.open.push_back(std::move(f));
+    return t.open.back();
 }
 
-bool CsiFrameAssembler::frameComplete(const Pending& p) const
+uint8_t CsiFrameAssembler::expectedCores(const Transmitter& t, const OpenFrame& f) const
 {
-    if (!p.streamsKnown) return false;
-    const uint64_t expected = pairMask(p.expectedCores, p.streamsSeen);
-    return (p.obs->presentMask & expected) == expected;
+    return f.headerCores ? f.headerCores : uint8_t(t.coresSeen & options_.coreMask);
 }
 
-void CsiFrameAssembler::emit(Pending& p)
+bool CsiFrameAssembler::frameComplete(const Transmitter& t, const OpenFrame& f) const
 {
-    p.streamsKnown = true;  // a whole frame went by: its streams are what the AP sends
-    if (frameComplete(p))
+    if (!t.shapeKnown) return false;
+    const uint64_t expected = pairMask(expectedCores(t, f), t.streamsSeen);
+    return (f.obs->presentMask & expected) == expected;
+}
+
+void CsiFrameAssembler::emit(Transmitter& t, size_t openIndex)
+{
+    OpenFrame f = std::move(t.open[openIndex]);
+    t.open.erase(t.open.begin() + std::ptrdiff_t(openIndex));
+    t.shapeKnown = true;  // a whole frame went by: its streams and cores are what the AP sends
+    const uint64_t expected = pairMask(expectedCores(t, f), t.streamsSeen);
+    if ((f.obs->presentMask & expected) == expected)
         ++stats_.framesComplete;
     else
     {
         ++stats_.framesIncomplete;
-        const uint64_t expected = pairMask(p.expectedCores, p.streamsSeen);
-        stats_.missingPairs += uint64_t(__builtin_popcountll(expected & ~p.obs->presentMask));
+        stats_.missingPairs += uint64_t(__builtin_popcountll(expected & ~f.obs->presentMask));
+    }
+
+    // Keep the rows of the cores that arrived or were expected: a router reporting cores
+    // 0, 1, 3 gives three rows, not four with one always missing.
+    auto& obs = *f.obs;
+    uint8_t keep = expectedCores(t, f);
+    for (unsigned m = 0; m < obs.nTx; ++m)
+        keep |= uint8_t((obs.presentMask >> (m * CObservationWiFiCSI::kMaxChains)) & 0xFF);
+    keep &= uint8_t((1u << obs.nRx) - 1);
+    if (keep != uint8_t((1u << obs.nRx) - 1))
+    {
+        std::vector<uint8_t> cores;
+        for (unsigned c = 0; c < obs.nRx; ++c)
+            if ((keep >> c) & 1u) cores.push_back(uint8_t(c));
+        const bool contiguous = cores.empty() || cores.back() + 1u == cores.size();
+        CObservationWiFiCSI compact;
+        compact.chanspec = obs.chanspec;
+        compact.resize(obs.nTx, unsigned(cores.size()), obs.nfft());
+        for (unsigned m = 0; m < obs.nTx; ++m)
+            for (size_t r = 0; r < cores.size(); ++r)
+            {
+                if (!obs.isPresent(m, cores[r])) continue;
+                std::copy_n(obs.pair(m, cores[r]), obs.nfft(), compact.pair(m, unsigned(r)));
+                compact.setPresent(m, unsigned(r));
+            }
+        obs.csi = std::move(compact.csi);
+        obs.presentMask = compact.presentMask;
+        obs.nRx = uint8_t(cores.size());
+        obs.rxCores = contiguous ? std::vector<uint8_t>{} : cores;
     }
     // Only the 4366c0 firmware overwrites CSI words with PHY status (DESIGN.md §4).
-    if (p.obs->source == nexmon::toString(nexmon::Chip::BCM4366c0))
-        applyOverwrittenBinPolicy(*p.obs, options_.overwrittenBins);
-    p.lastEmittedSequence = p.obs->sequenceNumber;
-    p.lastEmittedMask = p.obs->presentMask;
-    p.hasEmitted = true;
-    onFrame_(std::move(p.obs));
-    p.obs.reset();
+    if (obs.source == nexmon::toString(nexmon::Chip::BCM4366c0))
+        applyOverwrittenBinPolicy(obs, options_.overwrittenBins);
+
+    if (t.recentKeys.size() < kRecentFrames)
+    {
+        t.recentKeys.push_back(f.key);
+        t.recentPairs.push_back(f.pairs);
+    }
+    else
+    {
+        t.recentKeys[t.recentNext] = f.key;
+        t.recentPairs[t.recentNext] = f.pairs;
+    }
+    t.recentNext = (t.recentNext + 1) % kRecentFrames;
+    onFrame_(std::move(f.obs));
 }
 
 void CsiFrameAssembler::flushExpired(mrpt::Clock::time_point now)
@@ -317,31 +429,32 @@ void CsiFrameAssembler::flushExpired(mrpt::Clock::time_point now)
     const auto timeout = std::chrono::duration_cast<mrpt::Clock::duration>(
         std::chrono::duration<double>(options_.frameTimeout_s));
     for (auto& kv : transmitters_)
-        if (kv.second.obs && now - kv.second.firstArrival >= timeout) emit(kv.second);
+        for (size_t i = kv.second.open.size(); i-- > 0;)
+            if (now - kv.second.open[i].firstArrival >= timeout) emit(kv.second, i);
 }
 
 void CsiFrameAssembler::flushAll()
 {
     for (auto& kv : transmitters_)
-        if (kv.second.obs) emit(kv.second);
+        while (!kv.second.open.empty()) emit(kv.second, 0);
 }
 
 void CsiFrameAssembler::evictStalest()
 {
-    // Prefer forgetting a transmitter with nothing pending; otherwise emit the oldest frame.
+    // Prefer forgetting a transmitter with nothing pending; otherwise the least recently heard.
     auto victim = transmitters_.end();
     for (auto it = transmitters_.begin(); it != transmitters_.end(); ++it)
     {
-        if (!it->second.obs)
+        if (it->second.open.empty())
         {
             victim = it;
             break;
         }
-        if (victim == transmitters_.end() || it->second.firstArrival < victim->second.firstArrival)
+        if (victim == transmitters_.end() || it->second.lastActivity < victim->second.lastActivity)
             victim = it;
     }
     if (victim == transmitters_.end()) return;
-    if (victim->second.obs) emit(victim->second);
+    while (!victim->second.open.empty()) emit(victim->second, 0);
     transmitters_.erase(victim);
 }
 

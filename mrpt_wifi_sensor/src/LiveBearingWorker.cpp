@@ -227,9 +227,15 @@ void LiveBearingWorker::estimate(Slot& slot)
     if (!lastChannel_ || *lastChannel_ != csi.chanspec.raw)
     {
         lastChannel_ = csi.chanspec.raw;
-        auto m = describeCalibration(
-            *processor_, csi.chanspec, csi.nRx, settings_.calibrationMaxAge_days,
-            mrpt::Clock::now());
+        // The calibration holds one phase per array element, which need not be one per row (an
+        // array naming some of the cores); a frame lacking the array's cores is said at once.
+        std::vector<unsigned> rows;
+        const auto fits = processor_->preprocessor().elementRows(csi, rows);
+        auto m = fits == RejectReason::Accepted
+                     ? describeCalibration(
+                           *processor_, csi.chanspec, unsigned(rows.size()),
+                           settings_.calibrationMaxAge_days, mrpt::Clock::now())
+                     : Message{true, processor_->preprocessor().coreMismatchMessage(csi)};
         m.text = "first frame on " + csi.chanspec.asString() + ": " + m.text;
         std::lock_guard<std::mutex> lk(mutex_);
         messages_.push_back(std::move(m));

@@ -440,7 +440,7 @@ DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned r
     h.frameControl = obs.frameControl;
     h.transmitter = obs.transmitter;
     h.sequenceControl = uint16_t(obs.sequenceNumber << 4 | (obs.fragmentNumber & 0xF));
-    h.core = uint8_t(rx);
+    h.core = uint8_t(obs.coreOfRow(rx));  // the row's own core (rxCores: a core subset)
     h.stream = uint8_t(tx);
     h.chanspec = obs.chanspec;
     h.chip = obs.headerVariant == NexmonHeaderVariant::UbiLocate ? Chip::BCM4366c0 : chip;
@@ -448,7 +448,7 @@ DatagramHeader headerFor(const CObservationWiFiCSI& obs, unsigned tx, unsigned r
     h.firmwareCounter = obs.firmwareCounter;
     if (obs.headerVariant == NexmonHeaderVariant::UbiLocate)
     {
-        h.coreMask = uint8_t((1u << obs.nRx) - 1);
+        for (unsigned r = 0; r < obs.nRx; ++r) h.coreMask |= uint8_t(1u << obs.coreOfRow(r));
         h.streamMask = uint8_t((1u << obs.nTx) - 1);
     }
     return h;

@@ -75,15 +75,26 @@ inline PhaseCalibration truthCalibration(
     for (size_t i = 0; i < rx.size(); ++i)
     {
         const auto& ch = simulator.hardware().chain(cs, unsigned(i));
+        // Chains 1.. hold in jump state 0, which may have a delay of its own (listed states).
+        const auto& hw = simulator.hardware();
+        const double stateZero_s = i > 0 && hw.spec().antennaJumps ? hw.jumpStateDelay_s(0) : 0.0;
         std::vector<double> row;
-        for (int k : cal.subcarriers) row.push_back(ch.phase_rad(k, cs.nfft()));
+        for (int k : cal.subcarriers)
+            row.push_back(wrapAngle(
+                ch.phase_rad(k, cs.nfft()) -
+                2 * M_PI *
+                    std::fmod(
+                        (hw.spec().jumpBaseband ? k * kSubcarrierSpacingHz
+                                                : subcarrierFrequencyHz(cs, k)) *
+                            stateZero_s,
+                        1.0)));
         cal.phases_rad.push_back(row);
         cal.gains_dB.push_back(ch.gain_dB);
     }
     // Jump states: state s of chain i adds a delay τ_s (phase −2π·f_k·τ_s) and its own phase;
-    // relative to state 0 that is deltaDelay = τ_s, deltaPhase = −2π·f_c·τ_s + own phase. The
-    // centre a frame is classified by is the delay the chain's response itself implies (its
-    // phase slope relative to chain 0) plus τ_s.
+    // relative to state 0 that is deltaDelay = τ_s − τ_0, deltaPhase = −2π·f_c·(τ_s − τ_0) + own
+    // phase. The centre a frame is classified by is the delay the chain's response itself
+    // implies (its phase slope relative to chain 0, state 0 included) plus τ_s − τ_0.
     const auto& hw = simulator.hardware();
     if (hw.spec().antennaJumps)
     {
@@ -95,7 +106,8 @@ inline PhaseCalibration truthCalibration(
             for (size_t j = 0; j < cal.subcarriers.size(); ++j)
             {
                 const double k = cal.subcarriers[j];
-                const double p = cal.phases_rad[i][j] - cal.phases_rad[0][j];
+                const double p = hw.chain(cs, unsigned(i)).phase_rad(int(k), cs.nfft()) -
+                                 hw.chain(cs, 0).phase_rad(int(k), cs.nfft());
                 sk += k, skk += k * k, sp += p, skp += k * p;
             }
             const double slope = (n * skp - sk * sp) / (n * skk - sk * sk);
@@ -105,10 +117,11 @@ inline PhaseCalibration truthCalibration(
                 ChainStateCalibration c;
                 c.antenna = unsigned(i);
                 c.state = uint8_t(st);
-                c.deltaDelay_s = hw.jumpStateDelay_s(uint8_t(st));
-                c.delay_s = ownDelay + c.deltaDelay_s;
+                c.deltaDelay_s = hw.jumpStateDelay_s(uint8_t(st)) - hw.jumpStateDelay_s(0);
+                c.delay_s = ownDelay + hw.jumpStateDelay_s(uint8_t(st));
                 c.deltaPhase_rad = wrapAngle(
-                    -2 * M_PI * std::fmod(fc * c.deltaDelay_s, 1.0) +
+                    (hw.spec().jumpBaseband ? 0.0
+                                            : -2 * M_PI * std::fmod(fc * c.deltaDelay_s, 1.0)) +
                     hw.jumpStatePhase_rad(unsigned(i), uint8_t(st)) -
                     hw.jumpStatePhase_rad(unsigned(i), 0));
                 cal.chainStates.push_back(c);

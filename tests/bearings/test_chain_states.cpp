@@ -266,6 +266,132 @@ TEST(ChainStates, TrueStatesUndoTheJumpsInTheSimulator)
     EXPECT_LT(worst * 180 / M_PI, 0.05);
 }
 
+namespace
+{
+/** A random room on channel 6 at 20 MHz whose chains jump among the delay states a real
+ *  RT-AC86U shows there (−20.9, −9.0, +4.1, +16.0 ns, ~12.5 ns apart, sample slips that leave
+ *  the phase at the centre frequency alone: the muTrack splitter captures). */
+sim::Scenario realStatesRoom20(uint32_t seed, double rate_Hz, double duration_s)
+{
+    sim::Scenario sc = jumpyRoom(seed, rate_Hz, duration_s);
+    for (auto& tx : sc.transmitters) tx.chanspec = Chanspec::fromString("6/20");
+    sc.impairments.jumpStateDelays_s = {-20.9e-9, -9.0e-9, 4.1e-9, 16.0e-9};
+    sc.impairments.jumpStates = 4;
+    sc.impairments.jumpBaseband = true;
+    sc.impairments.jumpStatePhase = false;
+    return sc;
+}
+}  // namespace
+
+TEST(ChainStates, RealSizedStatesAt20MHzAreDetectedTrackedAndCorrected)
+{
+    // Issue 54.4: states one 80 MHz sample apart at 20 MHz, where the per-frame delay noise is
+    // also four times the 80 MHz one. Detected and tracked (the recorder, no calibration): one
+    // tracker state per true state, frames in the right one, the changes counted once.
+    const sim::Scenario sc = realStatesRoom20(3, 0.2, 40);
+    {
+        sim::Simulator simulator(sc);
+        ChainStateRecorder recorder;
+        std::vector<std::map<std::pair<uint8_t, uint8_t>, size_t>> votes(4);
+        std::vector<std::set<uint8_t>> visited(4);
+        size_t frames = 0, unknown = 0, classified = 0;
+        uint64_t trueChanges = 0;
+        std::vector<uint8_t> lastTruth;
+        sim::SimEvent ev;
+        while (simulator.next(ev))
+        {
+            if (ev.kind != sim::SimEvent::Kind::Csi) continue;
+            auto frame = ev.csi;
+            recorder.record(*frame);
+            if (frame->chainState.empty()) continue;
+            ++frames;
+            const std::vector<uint8_t> truth(
+                ev.frame.packet.jumpState.begin(), ev.frame.packet.jumpState.begin() + 4);
+            for (unsigned i = 1; i < 4; ++i)
+            {
+                visited[i].insert(truth[i]);
+                if (!lastTruth.empty() && truth[i] != lastTruth[i]) ++trueChanges;
+                if (frame->chainState[i] == kUnknownChainState)
+                    ++unknown;
+                else
+                    ++classified, votes[i][{frame->chainState[i], truth[i]}]++;
+            }
+            lastTruth = truth;
+        }
+        ASSERT_GT(frames, 500u);
+        size_t agree = 0;
+        for (unsigned i = 1; i < 4; ++i)
+        {
+            // Each tracker id stands for the true state most of its frames were in.
+            std::map<uint8_t, std::pair<uint8_t, size_t>> best;
+            for (const auto& [k, n] : votes[i])
+                if (n > best[k.first].second) best[k.first] = {k.second, n};
+            std::set<uint8_t> covered;
+            for (const auto& [id, b] : best) agree += b.second, covered.insert(b.first);
+            EXPECT_EQ(best.size(), visited[i].size())
+                << "chain " << i << ": states found vs visited\n"
+                << recorder.summary();
+            EXPECT_EQ(covered, visited[i]) << "chain " << i << "\n" << recorder.summary();
+        }
+        std::cout << frames << " frames: " << agree << " of " << classified
+                  << " classified chain-frames in the right state, " << unknown
+                  << " unknown; changes " << recorder.changes() << " detected, " << trueChanges
+                  << " true\n"
+                  << recorder.summary();
+        EXPECT_GE(double(agree), 0.97 * double(classified));
+        EXPECT_LE(double(unknown), 0.2 * double(unknown + classified));
+        EXPECT_GE(recorder.changes(), trueChanges);
+        EXPECT_LE(double(recorder.changes()), 1.3 * double(trueChanges));
+    }
+
+    // Corrected: with the states in the calibration (as wifi-calibrate writes it at 20 MHz),
+    // every chain's phase equals the same room's without jumps, and few frames are left out.
+    sim::Scenario withJumps = sc, without = sc;
+    without.impairments.antennaJumps = false;
+    withJumps.impairments.awgn = without.impairments.awgn = false;
+    sim::Simulator a(withJumps), b(without);
+    const AntennaArray rx = fromSimArray(sc.receiver.array);
+    PhaseCalibration cal = truthCalibration(a, rx, sc.transmitters.front().chanspec);
+    cal.chainStateTolerance_s = 4e-9;
+    const PhaseCalibration plain = truthCalibration(b, rx, sc.transmitters.front().chanspec);
+    PreprocessOptions po;
+    po.removeSamplingTimeOffset = false;
+    po.normalizePower = false;
+    CsiPreprocessor pa(po, rx, CalibrationStore::fromCalibration(cal)),
+        pb(po, rx, CalibrationStore::fromCalibration(plain));
+    sim::SimEvent ea, eb;
+    CleanCsi ca, cb;
+    size_t frames = 0, corrected = 0, jumped = 0, wrong = 0;
+    std::vector<double> errors_deg;
+    while (a.next(ea) && b.next(eb))
+    {
+        if (ea.kind != sim::SimEvent::Kind::Csi) continue;
+        ++frames;
+        if (pa.process(*ea.csi, ca) != RejectReason::Accepted) continue;
+        ASSERT_EQ(pb.process(*eb.csi, cb), RejectReason::Accepted);
+        ++corrected;
+        for (unsigned i = 1; i < ca.nRx; ++i)
+        {
+            jumped += ea.frame.packet.jumpState[i] != 0;
+            std::complex<double> acc{0, 0};
+            for (Eigen::Index j = 0; j < ca.H.cols(); ++j)
+                acc +=
+                    std::complex<double>(ca.H(i, j)) * std::conj(std::complex<double>(cb.H(i, j)));
+            errors_deg.push_back(std::abs(std::arg(acc)) * 180 / M_PI);
+            wrong += errors_deg.back() > 5;
+        }
+    }
+    std::sort(errors_deg.begin(), errors_deg.end());
+    std::cout << pa.chainStateTrackers().front()->summary() << corrected << " of " << frames
+              << " frames corrected; chain phase error median " << errors_deg[errors_deg.size() / 2]
+              << " deg, p99 " << errors_deg[errors_deg.size() * 99 / 100] << " deg, " << wrong
+              << " chain-frames beyond 5 deg\n";
+    EXPECT_GT(jumped, 100u);
+    EXPECT_GE(double(corrected), 0.8 * double(frames));
+    EXPECT_LT(errors_deg[errors_deg.size() * 99 / 100], 0.5);
+    EXPECT_LE(double(wrong), 0.002 * double(errors_deg.size()));  // measured: 9 of 16005
+}
+
 TEST(ChainStateRecorder, RecordsWhatTheBearingChainClassifies)
 {
     // The sensor records states on the raw frames; the bearing chain classifies them again on

@@ -7,13 +7,16 @@
 #include <mrpt/obs/CObservationBearingRange.h>
 #include <mrpt/obs/CObservationImage.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/obs/PhaseCalibration.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 
 #include "TestSupport.h"
 
@@ -31,16 +34,15 @@ std::string arrays()
     return test::sourceDir() + "/share/arrays/";
 }
 
-/** 2 s of the bearing scenario as a rawlog (CSI + odometry). */
-const std::string& simulatedRawlog()
+/** 2 s of the bearing scenario as a rawlog (CSI + odometry) in `path`; with
+ *  `calibrated`, without per-chain phase offsets, so bearings from any subset of the chains
+ *  agree without a calibration. */
+void simulateBearingScenario(const std::string& path, bool calibrated = false)
 {
-    static test::TempDir dir;
-    static std::string path;
-    if (!path.empty()) return path;
     auto sc = sim::Scenario::fromYamlFile(test::sourceDir() + "/share/scenarios/bearing.yaml");
     sc.duration_s = 2.0;
+    if (calibrated) sc.impairments.antennaPhaseOffsets = false;
     sim::Simulator s(sc);
-    path = dir.file("in.rawlog");
     mrpt::io::CFileGZOutputStream f(path);
     auto ar = mrpt::serialization::archiveFrom(f);
     sim::SimEvent ev;
@@ -51,6 +53,14 @@ const std::string& simulatedRawlog()
         else
             ar << *ev.odometry;
     }
+}
+
+const std::string& simulatedRawlog()
+{
+    static test::TempDir dir;
+    static const std::string path = dir.file("in.rawlog");
+    static const bool done = (simulateBearingScenario(path), true);
+    (void)done;
     return path;
 }
 
@@ -168,6 +178,147 @@ TEST(BearingApp, ArrayNotMatchingTheCsiFailsBeforeWork)
     EXPECT_NE(r.exitCode, 0);
     EXPECT_NE(r.output.find("4 receive chains"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(tmp.file("o.rawlog")));
+}
+
+namespace
+{
+const std::string& calibratedRawlog()
+{
+    static test::TempDir dir;
+    static const std::string path = dir.file("calibrated.rawlog");
+    static const bool done = (simulateBearingScenario(path, true), true);
+    (void)done;
+    return path;
+}
+
+/** The calibrated recording as a router with only cores `keep` enabled would give it: each
+ *  frame's rows for those cores, rxCores saying which. */
+std::string withCores(const std::vector<uint8_t>& keep, const std::string& path)
+{
+    mrpt::io::CFileGZInputStream in(calibratedRawlog());
+    auto ia = mrpt::serialization::archiveFrom(in);
+    mrpt::io::CFileGZOutputStream out(path);
+    auto oa = mrpt::serialization::archiveFrom(out);
+    for (;;)
+    {
+        mrpt::serialization::CSerializable::Ptr obj;
+        try
+        {
+            obj = ia.ReadObject();
+        }
+        catch (...)
+        {
+            break;
+        }
+        if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(obj))
+        {
+            auto cut = CObservationWiFiCSI::Create(*c);
+            cut->resize(c->nTx, unsigned(keep.size()), c->nfft());
+            for (unsigned m = 0; m < c->nTx; ++m)
+                for (size_t r = 0; r < keep.size(); ++r)
+                {
+                    std::copy_n(c->pair(m, keep[r]), c->nfft(), cut->pair(m, unsigned(r)));
+                    cut->setPresent(m, unsigned(r));
+                }
+            cut->rxCores = keep;
+            cut->chainDelay_ns.clear();
+            cut->chainState.clear();
+            oa << *cut;
+        }
+        else
+            oa << *obj;
+    }
+    return path;
+}
+
+/** Median AoA [deg] per transmitter from csi-bearings' CSV. */
+std::map<std::string, double> medianAoa(const std::string& csv)
+{
+    std::map<std::string, std::vector<double>> v;
+    std::istringstream lines(test::readFile(csv));
+    std::string line;
+    std::getline(lines, line);
+    while (std::getline(lines, line))
+    {
+        std::vector<std::string> f;
+        std::istringstream cells(line);
+        for (std::string c; std::getline(cells, c, ',');) f.push_back(c);
+        v[f.at(1)].push_back(std::stod(f.at(5)));
+    }
+    std::map<std::string, double> m;
+    for (auto& [mac, a] : v)
+    {
+        std::nth_element(a.begin(), a.begin() + long(a.size() / 2), a.end());
+        m[mac] = a[a.size() / 2];
+    }
+    return m;
+}
+}  // namespace
+
+TEST(BearingApp, RouterWithSomeCoresGivesBearingsThroughAnArrayNamingThem)
+{
+    // Cores 0, 1, 3 of the simulated RT-AC86U (core mask 0xb). An array file naming them reads
+    // the right rows: the bearings agree with those of all four chains.
+    test::TempDir tmp;
+    const std::string cut = withCores({0, 1, 3}, tmp.file("cores013.rawlog"));
+    auto a = AntennaArray::fromYamlFile(arrays() + "rt-ac86u.yaml");
+    a.name = "rt-ac86u";
+    // Listed in another order than the rows: element i must read the row of core cores[i].
+    a.elements = {a.elements[3], a.elements[0], a.elements[1]};
+    a.cores = {3, 0, 1};
+    const std::string arrayFile = tmp.file("rt-ac86u-013.yaml");
+    std::ofstream(arrayFile) << a.asYamlText();
+
+    auto r = test::run(
+        program() + " " + calibratedRawlog() + " " + tmp.file("all.rawlog") + " --csv " +
+        tmp.file("all.csv") + " -q");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    r = test::run(
+        program() + " " + cut + " " + tmp.file("cut.rawlog") + " --array " + arrayFile + " --csv " +
+        tmp.file("cut.csv") + " -q");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const auto all = medianAoa(tmp.file("all.csv")), some = medianAoa(tmp.file("cut.csv"));
+    ASSERT_EQ(all.size(), 3u);
+    ASSERT_EQ(some.size(), 3u);
+    for (const auto& [mac, aoa] : all) EXPECT_NEAR(some.at(mac), aoa, 3.0) << mac;
+
+    // The four-element array reads core 2, which isn't there: refused before any work, saying
+    // what to write in the array file.
+    r = test::run(program() + " " + cut + " " + tmp.file("o.rawlog") + " -q");
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.output.find("cores: [0, 1, 3]"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(tmp.file("o.rawlog")));
+}
+
+TEST(BearingApp, NoBearingFromARecordingExitsNonZeroSayingWhy)
+{
+    // One receive chain: CSI but no angle of arrival in any frame.
+    test::TempDir tmp;
+    const std::string one = withCores({0}, tmp.file("core0.rawlog"));
+    const auto r = test::run(program() + " " + one + " " + tmp.file("o.rawlog") + " -q");
+    EXPECT_EQ(r.exitCode, 7) << r.output;
+    EXPECT_NE(r.output.find("no bearing from the"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("one receive antenna"), std::string::npos) << r.output;
+}
+
+TEST(BearingApp, RealRouterWithCoreMask0xbGivesBearings)
+{
+    // muTrack D1 (RT-AC86U, cores 0, 1, 3): imported as it is, every frame gives a bearing.
+    const std::string pcap =
+        test::sharedDir().empty()
+            ? std::string()
+            : test::sharedDir() + "/data/mutrack/D1/D1_CSI_2G_20M_AP5_tr13.pcap";
+    if (pcap.empty() || !fs::exists(pcap)) GTEST_SKIP() << "../shared/data/mutrack absent";
+    test::TempDir tmp;
+    auto r =
+        test::run(test::binDir() + "/csi-import " + pcap + " " + tmp.file("in.rawlog") + " -q");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("complete 123, incomplete 0"), std::string::npos) << r.output;
+    r = test::run(
+        program() + " " + tmp.file("in.rawlog") + " " + tmp.file("o.rawlog") +
+        " --array rt-ac86u-3core-57mm -q");
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    EXPECT_NE(r.output.find("(123 bearings)"), std::string::npos) << r.output;
 }
 
 TEST(BearingApp, DefaultEstimatorAndOdometry)

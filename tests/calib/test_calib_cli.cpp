@@ -17,30 +17,10 @@ namespace
 const std::string kBin = MRPT_WIFI_BIN_DIR;
 const std::string kArrays = std::string(MRPT_WIFI_SOURCE_DIR) + "/share/arrays/";
 
-struct Run
+using Run = mrpt_wifi::test::SeparateOutputs;
+Run run(const std::string& command)
 {
-    int rc = -1;
-    std::string out, err;
-};
-
-std::string slurp(const std::string& path)
-{
-    std::ifstream f(path);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-Run run(const std::string& args)
-{
-    static int n = 0;
-    const std::string base = mrpt_wifi::test::tempPath() + "_run" + std::to_string(n++);
-    const int st = std::system((args + " >" + base + ".out 2>" + base + ".err").c_str());
-    Run r;
-    r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    r.out = slurp(base + ".out");
-    r.err = slurp(base + ".err");
-    return r;
+    return mrpt_wifi::test::runSeparately(command);
 }
 
 /** Simulates a drive into DIR/drive.rawlog with ground truth in DIR/truth. */
@@ -184,7 +164,7 @@ namespace
 /** Columns of a csi-bearings CSV: {has_aod, aod_deg} per row. */
 std::vector<std::pair<std::string, std::string>> aodCells(const std::string& csv)
 {
-    std::istringstream in(slurp(csv));
+    std::istringstream in(mrpt_wifi::test::readFile(csv));
     std::string line;
     std::getline(in, line);  // header
     std::vector<std::pair<std::string, std::string>> out;

@@ -9,6 +9,7 @@
 #include <mrpt_wifi/calib/CalibrationInput.h>
 #include <mrpt_wifi/calib/CalibrationReport.h>
 #include <mrpt_wifi/calib/PhaseCalibrator.h>
+#include <mrpt_wifi/obs/ChainStates.h>
 
 #include <fstream>
 #include <random>
@@ -201,4 +202,56 @@ TEST(CalibUnits, Quantile)
     EXPECT_DOUBLE_EQ(quantile({3, 1, 2}, 0.5), 2);
     EXPECT_DOUBLE_EQ(quantile({5}, 0.9), 5);
     EXPECT_TRUE(std::isnan(quantile({}, 0.5)));
+}
+
+TEST(CalibUnits, ChainStatesThatDifferByADelayAloneAreNotWritten)
+{
+    // Issue 54: the muTrack RT-AC86Us' states are sample slips (12.5 ns at 20 MHz, the phase at
+    // the centre unchanged): the offsets hold in every state, and a state table would withhold
+    // bearings from over-the-air frames whose delays can't be matched to it.
+    PhaseCalibration c;
+    c.chainStates.resize(2);
+    c.chainStates[1].state = 1;
+    c.chainStates[1].deltaDelay_s = 12.8e-9;
+    c.chainStates[1].deltaPhase_rad = 0.4 * M_PI / 180;
+    PhaseCalibration a = c;
+    EXPECT_NE(
+        applyChainStatePolicy(a, ChainStatePolicy::Auto).find("delay alone"), std::string::npos);
+    EXPECT_TRUE(a.chainStates.empty());
+    // The file says so, and a tracker built on it doesn't warn that it "holds no jump states".
+    EXPECT_TRUE(a.chainStatesDelayOnly);
+    a.device = "rt-ac86u-3core-57mm";
+    a.chanspec = Chanspec::make(6, 20);
+    a.subcarriers = {-2, 2};
+    a.phases_rad.assign(3, {0.0, 0.0});
+    const auto text = a.asYamlText();
+    EXPECT_NE(text.find("chain_states_delay_only: true"), std::string::npos) << text;
+    const auto back = PhaseCalibration::fromYamlText(text);
+    EXPECT_TRUE(back.chainStatesDelayOnly);
+    ChainStateTracker quiet(3, &back, {}, 20);
+    std::vector<uint8_t> states;
+    for (int i = 0; i < 40; ++i) quiet.classify({0.0, 6e-9, -6e-9}, {1.0, 1.0, 1.0}, states);
+    for (const auto& n : quiet.takeNotices())
+        EXPECT_EQ(n.find("holds no jump states"), std::string::npos) << n;
+    PhaseCalibration plain = back;
+    plain.chainStatesDelayOnly = false;
+    ChainStateTracker warns(3, &plain, {}, 20);
+    for (int i = 0; i < 40; ++i) warns.classify({0.0, 6e-9, -6e-9}, {1.0, 1.0, 1.0}, states);
+    bool warned = false;
+    for (const auto& n : warns.takeNotices())
+        warned |= n.find("holds no jump states") != std::string::npos;
+    EXPECT_TRUE(warned);
+    a = c;
+    EXPECT_TRUE(applyChainStatePolicy(a, ChainStatePolicy::Always).empty());
+    EXPECT_FALSE(a.chainStatesDelayOnly);
+    EXPECT_EQ(a.chainStates.size(), 2u);
+    // A state with a phase of its own (the 80 MHz simulator's, nexmon_csi reports) is kept.
+    c.chainStates[1].deltaPhase_rad = 0.5;
+    a = c;
+    EXPECT_TRUE(applyChainStatePolicy(a, ChainStatePolicy::Auto).empty());
+    EXPECT_EQ(a.chainStates.size(), 2u);
+    EXPECT_FALSE(applyChainStatePolicy(a, ChainStatePolicy::Never).empty());
+    EXPECT_TRUE(a.chainStates.empty());
+    EXPECT_EQ(chainStatePolicyFromString("on", "x"), ChainStatePolicy::Always);
+    EXPECT_THROW(chainStatePolicyFromString("yes", "--chain-states"), std::invalid_argument);
 }

@@ -10,6 +10,8 @@
 #include <cstring>
 #include <sstream>
 
+#include "SyntheticCsi.h"
+
 using namespace mrpt_wifi;
 
 namespace
@@ -111,8 +113,9 @@ TEST(CObservationWiFiCSI, SerializationRoundTripKeepsEveryField)
 
 TEST(CObservationWiFiCSI, Version1RawlogsStillLoadWithoutChainStates)
 {
-    // A version-1 object is a version-2 one without the two chain-state vectors (two empty
-    // vectors: 8 bytes of counts before MRPT's end marker) and with version byte 1.
+    // A version-1 object is a version-3 one without the two chain-state vectors and the
+    // receive cores (three empty vectors: 12 bytes of counts before MRPT's end marker) and
+    // with version byte 1.
     auto a = makeFilledObservation();
     a->chainDelay_ns.clear();
     a->chainState.clear();
@@ -121,12 +124,12 @@ TEST(CObservationWiFiCSI, Version1RawlogsStillLoadWithoutChainStates)
     const size_t at = find(bytes, name);
     ASSERT_NE(at, std::string::npos);
     uint8_t& version = bytes[at + name.size()];
-    ASSERT_EQ(version, 2);
+    ASSERT_EQ(version, 3);
     version = 1;
-    ASSERT_GE(bytes.size(), 9u);
+    ASSERT_GE(bytes.size(), 13u);
     const auto end = bytes.end() - 1;  // MRPT's end-of-object marker
-    ASSERT_TRUE(std::all_of(end - 8, end, [](uint8_t c) { return c == 0; }));
-    bytes.erase(end - 8, end);
+    ASSERT_TRUE(std::all_of(end - 12, end, [](uint8_t c) { return c == 0; }));
+    bytes.erase(end - 12, end);
 
     const auto b = std::dynamic_pointer_cast<CObservationWiFiCSI>(deserialized(bytes));
     ASSERT_TRUE(b);
@@ -240,4 +243,37 @@ TEST(CObservationWiFiCSI, ExportTxtRowHasOneColumnPerValue)
     const size_t missingStart = 9 + (1 * 4 + 2) * 234 * 2;
     EXPECT_EQ(cols[missingStart], "NaN");
     EXPECT_NE(cols[9], "NaN");
+}
+
+TEST(CObservationWiFiCSI, ReceiveCoresRoundTripAndVersion2LoadsWithoutThem)
+{
+    // A router with core mask 0xb: three rows holding cores 0, 1, 3.
+    auto a = test::syntheticFrame(1, 3, 20, 5);
+    a->rxCores = {0, 1, 3};
+    auto bytes = serialized(*a);
+    auto b = std::dynamic_pointer_cast<CObservationWiFiCSI>(deserialized(bytes));
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b->rxCores, a->rxCores);
+    EXPECT_EQ(b->rowOfCore(3), 2);
+    EXPECT_EQ(b->rowOfCore(2), -1);
+    EXPECT_EQ(b->coreOfRow(2), 3u);
+    EXPECT_EQ(b->rowCoresAsString(), "0, 1, 3");
+
+    // Version 2 (no receive-core list): rows are cores 0..n-1.
+    a->rxCores.clear();
+    bytes = serialized(*a);
+    const std::string name = "CObservationWiFiCSI";
+    const size_t at = find(bytes, name);
+    ASSERT_NE(at, std::string::npos);
+    bytes[at + name.size()] = 2;
+    const auto end = bytes.end() - 1;
+    bytes.erase(end - 4, end);
+    b = std::dynamic_pointer_cast<CObservationWiFiCSI>(deserialized(bytes));
+    ASSERT_TRUE(b);
+    EXPECT_TRUE(b->rxCores.empty());
+    EXPECT_EQ(b->rowOfCore(2), 2);
+
+    // A damaged list (not ascending) is refused, naming the class.
+    a->rxCores = {0, 3, 1};
+    EXPECT_THROW(deserialized(serialized(*a)), std::exception);
 }

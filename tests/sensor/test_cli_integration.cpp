@@ -178,7 +178,8 @@ TEST(CliIntegration, RealCaptureConvertsAndDescribes)
     // The capture is UbiLocate: forcing the current-firmware header rejects every datagram.
     const auto wrong =
         run(pcap2rawlog() + path + " " + tmp.file("wrong.rawlog") + " --format nexmon");
-    EXPECT_EQ(wrong.exitCode, cli::kExitRecordsSkipped) << wrong.output;  // all skipped
+    // All skipped: no frame at all, which is "no result" (6) rather than "some skipped" (3).
+    EXPECT_EQ(wrong.exitCode, cli::kExitNoMatchingFrames) << wrong.output;
     EXPECT_NE(wrong.output.find("size not matching bandwidth: 144"), std::string::npos)
         << wrong.output;
 }
@@ -227,4 +228,21 @@ TEST(CliIntegration, BadInputNamesTheFileAndKeepsWhatWasConverted)
     const auto junk = run(csiExport() + tmp.file("notes.txt") + " --jsonl " + tmp.file("x.jsonl"));
     EXPECT_NE(junk.exitCode, 0) << junk.output;
     EXPECT_NE(junk.output.find("notes.txt"), std::string::npos) << junk.output;
+}
+
+TEST(CliIntegration, ACaptureWithoutCsiIsAFailureAScriptSees)
+{
+    // A capture with no CSI datagram (tcpdump on the wrong interface): no result, exit 6.
+    test::TempDir tmp;
+    {
+        PcapWriter w(tmp.file("empty.pcap"));
+    }
+    auto r = run(pcap2rawlog() + tmp.file("empty.pcap") + " " + tmp.file("x.rawlog"));
+    EXPECT_EQ(r.exitCode, cli::kExitNoMatchingFrames) << r.output;
+    EXPECT_NE(r.output.find("no CSI frame in"), std::string::npos) << r.output;
+    r = run(csiExport() + tmp.file("empty.pcap") + " --stats");
+    EXPECT_EQ(r.exitCode, cli::kExitNoMatchingFrames) << r.output;
+    // One frame is enough for success.
+    writeCapture(tmp.file("one.pcap"), 1);
+    EXPECT_EQ(run(pcap2rawlog() + tmp.file("one.pcap") + " " + tmp.file("y.rawlog")).exitCode, 0);
 }

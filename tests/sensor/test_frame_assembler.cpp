@@ -124,38 +124,126 @@ TEST(CsiFrameAssembler, TimeoutEmitsAStalledFrame)
     CsiFrameAssemblerOptions o;
     o.frameTimeout_s = 0.05;
     Harness h(o);
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 2)), t0 - 1ms);
     auto ds = nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 3));
     ds.resize(10);
     h.pushAll(ds, t0);
+    ASSERT_EQ(h.frames.size(), 1u);  // frame 2, when frame 3 started
     h.assembler.flushExpired(t0 + 40ms);
-    EXPECT_TRUE(h.frames.empty());
+    EXPECT_EQ(h.frames.size(), 1u);
     h.assembler.flushExpired(t0 + 60ms);
-    ASSERT_EQ(h.frames.size(), 1u);
+    ASSERT_EQ(h.frames.size(), 2u);
     EXPECT_EQ(h.assembler.stats().missingPairs, 6u);
 }
 
-TEST(CsiFrameAssembler, CountsDuplicatesAndLateDatagrams)
+TEST(CsiFrameAssembler, CountsDuplicatesAndLateDatagramsAndKeepsRetries)
 {
     Harness h;
+    // A whole frame first: the transmitter's shape (4 streams x 4 cores) is known.
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 19)), t0 - 1ms);
     const auto a = nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 20));
     const auto b = nexmon::encodeFrame(*test::syntheticFrame(4, 4, 80, 21));
     h.push(a[0], t0);
-    h.push(a[0], t0);        // duplicated on the wire
+    h.push(a[0], t0);        // duplicated on the wire: the same words
     h.push(b[0], t0 + 1ms);  // frame 21 starts: frame 20 goes out incomplete
     h.push(a[1], t0 + 2ms);  // reordered: frame 20 is gone
     for (size_t i = 1; i < b.size(); ++i) h.push(b[i], t0 + 3ms);
-    ASSERT_EQ(h.frames.size(), 2u);
-    EXPECT_EQ(h.frames[1]->sequenceNumber, 21);
-    EXPECT_TRUE(h.frames[1]->isComplete());
+    ASSERT_EQ(h.frames.size(), 3u);
+    EXPECT_EQ(h.frames[2]->sequenceNumber, 21);
+    EXPECT_TRUE(h.frames[2]->isComplete());
     const auto& s = h.assembler.stats();
     EXPECT_EQ(s.duplicates, 1u);
     EXPECT_EQ(s.lateDatagrams, 1u);
-    EXPECT_EQ(s.framesComplete, 1u);
+    EXPECT_EQ(s.framesComplete, 2u);
     EXPECT_EQ(s.framesIncomplete, 1u);
-    // A late copy of a frame already emitted complete is late too, not a new frame.
+    EXPECT_EQ(s.retries, 0u);
+    // A copy of a datagram of a frame already emitted is a duplicate, not a new frame.
     h.push(b[3], t0 + 4ms);
-    EXPECT_EQ(h.frames.size(), 2u);
-    EXPECT_EQ(h.assembler.stats().lateDatagrams, 2u);
+    EXPECT_EQ(h.frames.size(), 3u);
+    EXPECT_EQ(h.assembler.stats().duplicates, 2u);
+
+    // An 802.11 retry: frame 21 received again, other CSI. Another measurement: kept whole.
+    auto again = test::syntheticFrame(4, 4, 80, 21);
+    for (auto& v : again->csi) v *= std::complex<float>(0.0f, 1.0f);
+    const auto retry = nexmon::encodeFrame(*again);
+    for (const auto& d : retry) h.push(d, t0 + 5ms);
+    ASSERT_EQ(h.frames.size(), 4u);
+    EXPECT_EQ(h.frames[3]->sequenceNumber, 21);
+    EXPECT_TRUE(h.frames[3]->isComplete());
+    EXPECT_NEAR(
+        std::abs(h.frames[3]->at(1, 2, 40) - again->at(1, 2, 40)), 0.0f,
+        std::abs(again->at(1, 2, 40)) / 1024.0f);
+    EXPECT_EQ(h.assembler.stats().retries, 1u);
+    EXPECT_EQ(h.assembler.stats().lateDatagrams, 1u);
+}
+
+TEST(CsiFrameAssembler, LateFrameIsAssembledAndKept)
+{
+    // Frame 1933 arrives after 1934 has started (reordered on the way): both come out whole.
+    Harness h;
+    h.pushAll(nexmon::encodeFrame(*test::syntheticFrame(1, 4, 20, 1932)), t0);
+    const auto newer = nexmon::encodeFrame(*test::syntheticFrame(1, 4, 20, 1934));
+    const auto older = nexmon::encodeFrame(*test::syntheticFrame(1, 4, 20, 1933));
+    h.push(newer[0], t0 + 1ms);
+    for (const auto& d : older) h.push(d, t0 + 2ms);
+    for (size_t i = 1; i < newer.size(); ++i) h.push(newer[i], t0 + 3ms);
+    h.assembler.flushAll();
+    ASSERT_EQ(h.frames.size(), 3u);
+    std::vector<uint16_t> seqs;
+    for (const auto& f : h.frames)
+    {
+        EXPECT_TRUE(f->isComplete()) << f->sequenceNumber;
+        seqs.push_back(f->sequenceNumber);
+    }
+    std::sort(seqs.begin(), seqs.end());
+    EXPECT_EQ(seqs, (std::vector<uint16_t>{1932, 1933, 1934}));
+    EXPECT_EQ(h.assembler.stats().lateFrames, 1u);
+    EXPECT_EQ(h.assembler.stats().lateDatagrams, 0u);
+    EXPECT_EQ(h.assembler.stats().framesIncomplete, 0u);
+}
+
+TEST(CsiFrameAssembler, RouterReportingSomeCoresGivesCompleteFramesOfThoseCores)
+{
+    // An RT-AC86U with makecsiparams -C 0xb: cores 0, 1, 3 only. Frames are complete, hold
+    // three rows and say which cores they are.
+    Harness h(keepBins());
+    std::vector<CObservationWiFiCSI::Ptr> sent;
+    for (uint16_t seq = 50; seq < 54; ++seq)
+    {
+        sent.push_back(test::syntheticFrame(1, 4, 20, seq));
+        for (const auto& d : nexmon::encodeFrame(*sent.back()))
+        {
+            nexmon::DatagramHeader hd;
+            nexmon::RejectReason why{};
+            ASSERT_TRUE(nexmon::parseHeader(d.data(), d.size(), nexmon::FormatHint::Auto, hd, why));
+            if (hd.core != 2) h.push(d, t0);
+        }
+    }
+    h.assembler.flushAll();
+    ASSERT_EQ(h.frames.size(), 4u);
+    for (size_t i = 0; i < 4; ++i)
+    {
+        const auto& f = *h.frames[i];
+        EXPECT_TRUE(f.isComplete());
+        EXPECT_EQ(f.nRx, 3);
+        EXPECT_EQ(f.rxCores, (std::vector<uint8_t>{0, 1, 3}));
+        EXPECT_NEAR(
+            std::abs(f.at(0, 2, 20) - sent[i]->at(0, 3, 20)), 0.0f,
+            std::abs(sent[i]->at(0, 3, 20)) / 1024.0f);
+    }
+    const auto& s = h.assembler.stats();
+    EXPECT_EQ(s.framesComplete, 4u);
+    EXPECT_EQ(s.framesIncomplete, 0u);
+    EXPECT_EQ(s.coresSeen, 0x0b);
+    EXPECT_NE(s.asString().find("on receive cores 0, 1, 3"), std::string::npos) << s.asString();
+    // Written back out, the datagrams carry their own cores again.
+    for (const auto& d : nexmon::encodeFrame(*h.frames[0]))
+    {
+        nexmon::DatagramHeader hd;
+        nexmon::RejectReason why{};
+        ASSERT_TRUE(nexmon::parseHeader(d.data(), d.size(), nexmon::FormatHint::Auto, hd, why));
+        EXPECT_NE(hd.core, 2);
+    }
 }
 
 TEST(CsiFrameAssembler, LearnsHowManyStreamsATransmitterSends)

@@ -4,8 +4,14 @@
 #include <mrpt/math/wrap2pi.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
+#include <mrpt_wifi/sensor/NexmonFormat.h>
+#include <mrpt_wifi/sensor/PcapIO.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <set>
 
 #include "TestSupport.h"
 
@@ -114,4 +120,93 @@ TEST(RealCaptures, Lowest20MHzSubBandArrivesSignInverted)
             EXPECT_GT(deviation(-65), 150.0) << "seq " << f->sequenceNumber << " rx " << rx;
             EXPECT_LT(median(others), 10.0) << "seq " << f->sequenceNumber << " rx " << rx;
         }
+}
+
+// ---------------------------------------------------------------------------------------------
+// muTrack D1 (../shared/data/mutrack, see its README): three RT-AC86U APs with core mask 0xb.
+namespace
+{
+/** Receptions repeating an earlier (transmitter, sequence control, core, stream) within 50 ms
+ *  with other CSI words — 802.11 retries — counted from the datagrams alone. */
+struct DatagramRepeats
+{
+    uint64_t datagrams = 0, otherWords = 0, sameWords = 0;
+};
+DatagramRepeats countRepeats(const std::string& path)
+{
+    DatagramRepeats n;
+    PcapReader reader(path, nexmon::kDefaultUdpPort);
+    std::map<std::string, std::pair<double, std::set<std::string>>> seen;
+    PcapUdpDatagram d;
+    while (reader.next(d))
+    {
+        nexmon::DatagramHeader h;
+        nexmon::RejectReason why{};
+        if (!nexmon::parseHeader(d.payload, d.payloadLength, nexmon::FormatHint::Auto, h, why))
+            continue;
+        ++n.datagrams;
+        const double t = mrpt::Clock::toDouble(d.timestamp);
+        const std::string key = h.transmitter.asString() + "/" + std::to_string(h.sequenceControl) +
+                                "/" + std::to_string(h.core) + "/" + std::to_string(h.stream);
+        const std::string words(
+            reinterpret_cast<const char*>(d.payload + nexmon::csiOffset()),
+            d.payloadLength - nexmon::csiOffset());
+        auto it = seen.find(key);
+        if (it != seen.end() && t - it->second.first < 0.05)
+        {
+            ++(it->second.second.count(words) ? n.sameWords : n.otherWords);
+            it->second.second.insert(words);
+        }
+        else
+            seen[key] = {t, {words}};
+    }
+    return n;
+}
+}  // namespace
+
+TEST(RealCaptures, MuTrackCoreMask0xbFramesCompleteRetriesKeptInTimeOrder)
+{
+    const std::string dir =
+        test::sharedDir().empty() ? std::string() : test::sharedDir() + "/data/mutrack/D1";
+    if (dir.empty() || !std::filesystem::is_directory(dir))
+        GTEST_SKIP() << "../shared/data/mutrack absent";
+    uint64_t files = 0, frames = 0, retries = 0, repeats = 0, lateFrames = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+    {
+        if (e.path().extension() != ".pcap") continue;
+        ++files;
+        CsiFileReadSummary summary;
+        const auto got = readAll(e.path().string(), summary);
+        const auto& s = summary.assembler;
+        const auto independent = countRepeats(e.path().string());
+        // Every datagram is in a frame; every frame has cores 0, 1, 3 and nothing else.
+        EXPECT_EQ(s.accepted, independent.datagrams) << e.path();
+        EXPECT_EQ(s.framesIncomplete, 0u) << e.path();
+        EXPECT_EQ(s.lateDatagrams, 0u) << e.path();
+        EXPECT_EQ(s.duplicates, independent.sameWords) << e.path();
+        // A retry repeats all three cores: one kept frame per three repeated datagrams.
+        EXPECT_EQ(3 * s.retries, independent.otherWords) << e.path();
+        EXPECT_EQ(got.size(), s.accepted / 3) << e.path();
+        for (size_t i = 0; i < got.size(); ++i)
+        {
+            EXPECT_TRUE(got[i]->isComplete());
+            EXPECT_EQ(got[i]->rxCores, (std::vector<uint8_t>{0, 1, 3}));
+            if (i > 0)
+            {
+                EXPECT_GE(got[i]->timestamp, got[i - 1]->timestamp) << e.path() << " " << i;
+            }
+        }
+        frames += got.size();
+        retries += s.retries;
+        repeats += independent.otherWords;
+        lateFrames += s.lateFrames;
+    }
+    EXPECT_EQ(files, 48u);
+    // What the README says of these captures: about 5 % of datagrams are retries, and some
+    // frames arrive after their successor.
+    EXPECT_GT(retries, 100u);
+    EXPECT_GT(lateFrames, 0u);
+    std::cout << "muTrack D1: " << files << " captures, " << frames << " frames (" << retries
+              << " retries kept, " << repeats << " repeated datagrams; " << lateFrames
+              << " late frames kept)\n";
 }

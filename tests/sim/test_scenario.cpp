@@ -8,6 +8,7 @@
 #include <mrpt_wifi/sim/Simulator.h>
 
 #include <fstream>
+#include <set>
 
 #include "TestSupport.h"
 
@@ -272,4 +273,29 @@ TEST(Scenario, JumpStatesLimitedToAllowedOnesUntilATime)
     EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.allowed_states[1]");
     e = loadError(kValid + replaced(jumps, "allowed_until_s: 20", "allowed_until_s: -1"));
     EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.allowed_until_s");
+}
+
+TEST(Scenario, JumpStatesOfRealSizeFromListedDelays)
+{
+    // Issue 54: the states a real RT-AC86U shows at 20 MHz (one 80 MHz sample apart, sample
+    // slips); their count is the list's, a different `states` is refused with its key.
+    const std::string jumps =
+        "impairments:\n  antenna_jumps: {enabled: true, state_delays_ns: [-20.9, -9.0, 4.1, "
+        "16.0], baseband: true, rate_hz: 0.5}\n";
+    Scenario sc = Scenario::fromYamlText(kValid + jumps, "real.yaml", kShare + "/scenarios");
+    EXPECT_EQ(sc.impairments.jumpStates, 4u);
+    ASSERT_EQ(sc.impairments.jumpStateDelays_s.size(), 4u);
+    EXPECT_NEAR(sc.impairments.jumpStateDelays_s[0], -20.9e-9, 1e-15);
+    EXPECT_TRUE(sc.impairments.jumpBaseband);
+    const HardwareModel hw(sc.impairments, 4, sc.seed, 0, 60);
+    EXPECT_NEAR(hw.jumpStateDelay_s(3), 16.0e-9, 1e-15);
+    EXPECT_EQ(hw.jumpDelay_s(0, 30), 0.0);
+    std::set<uint8_t> visited;
+    for (const auto& e : hw.jumpEvents(1)) visited.insert(e.state);
+    EXPECT_EQ(visited.size(), 4u);
+
+    auto e = loadError(kValid + replaced(jumps, "enabled: true,", "enabled: true, states: 3,"));
+    EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.state_delays_ns");
+    e = loadError(kValid + replaced(jumps, "[-20.9, -9.0, 4.1, 16.0]", "[]"));
+    EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.state_delays_ns");
 }

@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <map>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::sim;
@@ -369,6 +371,36 @@ TEST(Simulator, NoiseHasTheRequestedSnrAndIsCircular)
     EXPECT_LT(std::abs(pseudo) / var, 0.05);  // E[n²] ≈ 0: circular
 }
 
+/** Frames of a static simulation whose chain 1 is in another jump state than in frame 0 (chain
+ *  0 unchanged): chain 1's phase relative to chain 0 at a few subcarriers k has moved by
+ *  expected(k, state in frame 0, state later), nothing else. */
+void expectRelativePhaseFollowsTheStates(
+    Simulator& sim, const std::function<double(int, uint8_t, uint8_t)>& expected)
+{
+    CObservationWiFiCSI first, later;
+    FrameTruth t0, t1;
+    sim.synthesizeFrame(0, 0, first, t0);
+    int compared = 0;
+    for (uint64_t n = 1; n < 400 && compared < 3; n += 7)
+    {
+        sim.synthesizeFrame(0, n, later, t1);
+        const uint8_t s0 = t0.packet.jumpState[1], s1 = t1.packet.jumpState[1];
+        if (s0 == s1 || t1.packet.jumpState[0] != t0.packet.jumpState[0]) continue;
+        ++compared;
+        for (int k : {-100, -3, 50, 120})
+        {
+            const unsigned b = subcarrierToBin(k, 256);
+            const auto rel0 =
+                std::complex<double>(first.at(0, 1, b)) / std::complex<double>(first.at(0, 0, b));
+            const auto rel1 =
+                std::complex<double>(later.at(0, 1, b)) / std::complex<double>(later.at(0, 0, b));
+            EXPECT_NEAR(wrapToPi(std::arg(rel1 / rel0) - expected(k, s0, s1)), 0.0, 1e-3)
+                << "k=" << k;
+        }
+    }
+    EXPECT_GE(compared, 1);
+}
+
 // Jump states: chain 1's phase relative to chain 0 moves by −2π·f_k·Δstate·step between frames
 // in different states, nothing else changing (static robot).
 TEST(Simulator, AntennaJumpStatesShiftTheRelativePhase)
@@ -383,29 +415,33 @@ TEST(Simulator, AntennaJumpStatesShiftTheRelativePhase)
     sc.duration_s = 10;
     Simulator sim(sc);
     ASSERT_GT(sim.hardware().jumpEvents(1).size(), 5u);
-    CObservationWiFiCSI first, later;
-    FrameTruth t0, t1;
-    sim.synthesizeFrame(0, 0, first, t0);
-    int compared = 0;
-    for (uint64_t n = 1; n < 400 && compared < 3; n += 7)
-    {
-        sim.synthesizeFrame(0, n, later, t1);
-        const int ds = int(t1.packet.jumpState[1]) - int(t0.packet.jumpState[1]);
-        if (ds == 0 || t1.packet.jumpState[0] != t0.packet.jumpState[0]) continue;
-        ++compared;
-        for (int k : {-100, -3, 50, 120})
-        {
-            const unsigned b = subcarrierToBin(k, 256);
-            const auto rel0 =
-                std::complex<double>(first.at(0, 1, b)) / std::complex<double>(first.at(0, 0, b));
-            const auto rel1 =
-                std::complex<double>(later.at(0, 1, b)) / std::complex<double>(later.at(0, 0, b));
-            const double expected =
-                -2 * M_PI * subcarrierFrequencyHz(first.chanspec, k) * ds * 3e-9;
-            EXPECT_NEAR(wrapToPi(std::arg(rel1 / rel0) - expected), 0.0, 1e-3) << "k=" << k;
-        }
-    }
-    EXPECT_GE(compared, 1);
+    expectRelativePhaseFollowsTheStates(
+        sim,
+        [&](int k, uint8_t s0, uint8_t s1) {
+            return -2 * M_PI * subcarrierFrequencyHz(Chanspec::make(155, 80), k) * (s1 - s0) * 3e-9;
+        });
+}
+
+// Issue 54: listed state delays, as sample slips (baseband): chain 1's phase relative to chain
+// 0 moves by −2π·k·Δf·(τ_s − τ_s') only, the phase at the centre frequency unchanged.
+TEST(Simulator, ListedJumpStatesAsSampleSlips)
+{
+    Scenario sc = baseScenario();
+    sc.motion.type = MotionType::Static;
+    sc.impairments = ImpairmentSpec::ideal();
+    sc.impairments.antennaJumps = true;
+    sc.impairments.jumpStateDelays_s = {-20.9e-9, -9.0e-9, 4.1e-9, 16.0e-9};
+    sc.impairments.jumpStates = 4;
+    sc.impairments.jumpBaseband = true;
+    sc.impairments.jumpRate_Hz = 5;
+    sc.duration_s = 10;
+    Simulator sim(sc);
+    EXPECT_DOUBLE_EQ(sim.hardware().jumpStateDelay_s(2), 4.1e-9);
+    EXPECT_EQ(sim.hardware().jumpDelay_s(0, 1.0), 0.0) << "chain 0 is the reference";
+    const auto& delays = sc.impairments.jumpStateDelays_s;
+    expectRelativePhaseFollowsTheStates(
+        sim, [&](int k, uint8_t s0, uint8_t s1)
+        { return -2 * M_PI * k * kSubcarrierSpacingHz * (delays[s1] - delays[s0]); });
 }
 
 TEST(Simulator, RebootDrawsNewPhaseOffsets)
@@ -493,4 +529,61 @@ TEST(Simulator, OdometryNoiseAndDrift)
     EXPECT_GT(driven, 15.0);
     EXPECT_NEAR(wrapToPi(odo.back().odometry.phi - rel.phi - driven * M_PI / 180), 0.0, 0.02);
     EXPECT_GT(yawError, 0.1);
+}
+
+// Issue 54: real RT-AC86Us hear about 4.5 % of frames twice, as 802.11 retries: the same
+// sequence number 0.02–7 ms later, another reception (its own noise). The stream has them when
+// asked, in time order.
+TEST(Simulator, RetriesAreFurtherReceptionsOfTheSameFrame)
+{
+    Scenario sc = baseScenario();
+    sc.impairments.retryProbability = 0.3;
+    sc.odometry.rate_Hz = 1;
+    Simulator sim(sc);
+    SimEvent ev;
+    std::map<std::pair<size_t, uint64_t>, std::pair<double, CObservationWiFiCSI::Ptr>> first;
+    size_t frames = 0, retries = 0;
+    double lastTime = -1;
+    for (size_t guard = 0; guard < 100000 && sim.next(ev); ++guard)
+    {
+        EXPECT_GE(ev.time_s, lastTime);
+        lastTime = ev.time_s;
+        if (ev.kind != SimEvent::Kind::Csi) continue;
+        const auto key = std::make_pair(ev.frame.transmitterIndex, ev.frame.frameIndex);
+        if (ev.frame.reception == 0)
+        {
+            ++frames;
+            first[key] = {ev.time_s, CObservationWiFiCSI::Create(*ev.csi)};
+            continue;
+        }
+        ++retries;
+        ASSERT_TRUE(first.count(key));
+        const auto& [t0, original] = first.at(key);
+        EXPECT_EQ(ev.csi->sequenceNumber, original->sequenceNumber);
+        EXPECT_GE(ev.time_s - t0, 20e-6);
+        EXPECT_LE(ev.time_s - t0, 7e-3);
+        EXPECT_NE(ev.csi->csi, original->csi);  // its own noise and offsets
+        // The same channel: the magnitudes across subcarriers and chains agree (the phases
+        // differ by the reception's own sampling-time offset and CFO).
+        double dot = 0, a = 0, b = 0;
+        for (size_t i = 0; i < original->csi.size(); ++i)
+        {
+            const double x = std::abs(original->csi[i]), y = std::abs(ev.csi->csi[i]);
+            dot += x * y, a += x * x, b += y * y;
+        }
+        EXPECT_GT(dot / std::sqrt(a * b), 0.8);
+    }
+    ASSERT_GT(frames, 100u);
+    EXPECT_NEAR(double(retries) / double(frames), 0.3, 0.06);
+
+    // Without the key: no retry.
+    sc.impairments.retryProbability = 0;
+    Simulator plain(sc);
+    for (size_t guard = 0; guard < 100000 && plain.next(ev); ++guard)
+    {
+        if (ev.kind == SimEvent::Kind::Csi)
+        {
+            ASSERT_EQ(ev.frame.reception, 0u);
+        }
+    }
 }

@@ -107,4 +107,25 @@ inline std::string readFile(const std::string& path)
     return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
 }
 
+/** What a command printed on stdout and on stderr, apart, and how it exited. */
+struct SeparateOutputs
+{
+    int rc = -1;
+    std::string out, err;
+};
+
+/** Runs a shell command, capturing stdout and stderr separately (through files in this
+ *  program's temporary folder). */
+inline SeparateOutputs runSeparately(const std::string& command)
+{
+    static std::atomic<unsigned> n{0};
+    const std::string base = tempPath() + "_run" + std::to_string(n++);
+    const int st = std::system((command + " >" + base + ".out 2>" + base + ".err").c_str());
+    SeparateOutputs r;
+    r.rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    r.out = readFile(base + ".out");
+    r.err = readFile(base + ".err");
+    return r;
+}
+
 }  // namespace mrpt_wifi::test

@@ -968,23 +968,32 @@ public:
         struct Candidate
         {
             double theta, delay, power;
+            bool competes;  //!< may be taken for the direct path
         };
         std::vector<Candidate> cands;
         double maxPower = 0;
         for (const auto& p0 : peaks)
         {
             const Peak2D p = refinePeak2D(P, p0.i, p0.j, grid_.circular);
-            cands.push_back({grid_.at(p.fi), delayAt(delays_, p.fj), p.value});
+            // A weaker peak on a linear array's last row (an endfire) is no earlier path: the
+            // array cannot place a direction there (its bearing error grows without bound),
+            // and on real RT-AC86U captures at 20 MHz the inter-chain delays a calibration
+            // leaves put peaks on both endfires at earlier delays than the path's (issue 54:
+            // muTrack D1, -90 deg in every window of a device 5 deg off broadside).
+            const bool endfireRow = !grid_.circular && (p0.i == 0 || p0.i + 1 == size_t(P.rows()));
+            cands.push_back(
+                {grid_.at(p.fi), delayAt(delays_, p.fj), p.value, cands.empty() || !endfireRow});
             maxPower = std::max(maxPower, double(p.value));
         }
         constexpr double kSameDelay_s = 5e-9, kCleanPath = 0.97;
+        constexpr double kReferenceBand_Hz = 244 * kSubcarrierSpacingHz;  // 80 MHz: k = ±122
         double earliest = INFINITY;
         for (const auto& c : cands)
-            if (c.power >= opts_.directPathPowerRatio * maxPower)
+            if (c.competes && c.power >= opts_.directPathPowerRatio * maxPower)
                 earliest = std::min(earliest, c.delay);
-        Candidate chosen{0, 0, -1};
+        Candidate chosen{0, 0, -1, true};
         for (const auto& c : cands)
-            if (c.power >= opts_.directPathPowerRatio * maxPower &&
+            if (c.competes && c.power >= opts_.directPathPowerRatio * maxPower &&
                 c.delay <= earliest + kSameDelay_s && c.power > chosen.power)
                 chosen = c;
         double theta = chosen.theta;
@@ -994,13 +1003,19 @@ public:
         // it from the paths the matched filter blurs into it (only where a plane wave leaves
         // power unexplained at that delay: a clean path needs none).
         const double cleanness = bartlettQuality(fastGroupedForm(theta, Rd_), Rd_, rx_.size());
+        // Its delay agrees with the profile's to within a share of the band's delay resolution
+        // (10 ns at 80 MHz; 4.4× that at 20 MHz, where the two delays of the same path differ
+        // by tens of ns and the refinement never applied: issue 54, muTrack D1).
+        const double band_Hz = layout_->frequencies_Hz.back() - layout_->frequencies_Hz.front();
+        const double samePathDelay_s =
+            2 * kSameDelay_s * std::max(1.0, kReferenceBand_Hz / std::max(band_Hz, 1.0));
         if (cleanness < kCleanPath && spotfi_.estimate(frames, ctx, spotfiResult_))
         {
             double bestD = 0.2 * beamwidth();
             for (const auto& c : spotfi_.candidates())
             {
                 const double d = foldedDistance(theta, c.theta);
-                if (d < bestD && std::abs(c.delay - chosen.delay) < kSameDelay_s * 2)
+                if (d < bestD && std::abs(c.delay - chosen.delay) < samePathDelay_s)
                 {
                     bestD = d;
                     theta =

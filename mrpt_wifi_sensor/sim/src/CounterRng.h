@@ -79,8 +79,9 @@ enum RngTag : uint64_t
     kTagOdometry,
     kTagNoiseTable,
     kTagSequence,
-    kTagTxChain = 0x7478,   //!< transmit chains ("tx"; apart from the sequential tags)
-    kTagJumpPhase = 0x6a70  //!< per-state phase of the jump states ("jp")
+    kTagTxChain = 0x7478,    //!< transmit chains ("tx"; apart from the sequential tags)
+    kTagJumpPhase = 0x6a70,  //!< per-state phase of the jump states ("jp")
+    kTagRetry = 0x7274       //!< 802.11 retries: whether, when, and their draws ("rt")
 };
 
 }  // namespace mrpt_wifi::sim::detail

@@ -119,6 +119,8 @@ uint8_t HardwareModel::jumpState(unsigned rx, double t_s) const
 
 double HardwareModel::jumpDelay_s(unsigned rx, double t_s) const
 {
+    // Chain 0 is the reference and never jumps, whatever delay a listed state 0 has.
+    if (jumps_.at(rx).empty()) return 0.0;
     return jumpStateDelay_s(jumpState(rx, t_s));
 }
 
@@ -173,6 +175,11 @@ void HardwareModel::writeJson(
     }
     o << "\n" << pad << "  ],\n";
     o << pad << "  \"jump_step_s\": " << spec_.jumpStep_s << ",\n";
+    o << pad << "  \"jump_baseband\": " << (spec_.jumpBaseband ? "true" : "false") << ",\n";
+    o << pad << "  \"jump_state_delay_s\": [";
+    for (unsigned st = 0; st < (spec_.antennaJumps ? spec_.jumpStates : 1u); ++st)
+        o << (st ? ", " : "") << jumpStateDelay_s(uint8_t(st));
+    o << "],\n";
     o << pad << "  \"jump_state_phase_rad\": [";
     for (unsigned rx = 0; rx < nRx_; ++rx)
     {

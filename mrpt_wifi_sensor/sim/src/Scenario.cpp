@@ -321,6 +321,7 @@ struct Reader
              "snr_db",
              "snr_cap_db",
              "timing_jitter",
+             "retry_probability",
              "antenna_jumps",
              "dead_cores",
              "dead_cores_missing",
@@ -346,14 +347,29 @@ struct Reader
         if (auto snr = n.get("snr_db")) s.fixedSnr_dB = snr->asDouble();
         s.snrCap_dB = n.doubleOr("snr_cap_db", s.snrCap_dB);
         s.timingJitter = n.doubleOr("timing_jitter", s.timingJitter);
+        s.retryProbability = n.doubleOr("retry_probability", s.retryProbability);
         if (auto j = n.get("antenna_jumps"))
         {
             j->allowOnly(
-                {"enabled", "states", "step_ns", "rate_hz", "state_phase", "allowed_states",
-                 "allowed_until_s"});
+                {"enabled", "states", "step_ns", "state_delays_ns", "baseband", "rate_hz",
+                 "state_phase", "allowed_states", "allowed_until_s"});
             s.antennaJumps = j->boolOr("enabled", true);
             s.jumpStates = j->unsignedOr("states", s.jumpStates, 16);
             s.jumpStep_s = j->doubleOr("step_ns", s.jumpStep_s * 1e9) * 1e-9;
+            if (auto d = j->get("state_delays_ns"))
+            {
+                // Listed delays are the states: their count is the state count.
+                if (d->size() < 1 || d->size() > 16)
+                    d->fail("expected a list of 1 to 16 state delays [ns]");
+                if (j->get("states") && j->unsignedOr("states", 0, 16) != d->size())
+                    d->fail(
+                        "lists " + std::to_string(d->size()) + " delays but 'states' is " +
+                        std::to_string(j->unsignedOr("states", 0, 16)));
+                for (size_t i = 0; i < d->size(); ++i)
+                    s.jumpStateDelays_s.push_back(d->at(i).asDouble() * 1e-9);
+                s.jumpStates = unsigned(s.jumpStateDelays_s.size());
+            }
+            s.jumpBaseband = j->boolOr("baseband", s.jumpBaseband);
             s.jumpRate_Hz = j->doubleOr("rate_hz", s.jumpRate_Hz);
             s.jumpStatePhase = j->boolOr("state_phase", s.jumpStatePhase);
             if (auto a = j->get("allowed_states"))
@@ -648,8 +664,20 @@ void Scenario::validate() const
                     std::to_string(nRx) + ")");
     if (!(imp.timingJitter >= 0 && imp.timingJitter < 1))
         fail("impairments.timing_jitter", "must be in [0, 1)");
+    if (!(imp.retryProbability >= 0 && imp.retryProbability < 1))
+        fail("impairments.retry_probability", "must be in [0, 1)");
     if (imp.antennaJumps && imp.jumpStates < 1)
         fail("impairments.antenna_jumps.states", "must be >= 1");
+    if (!imp.jumpStateDelays_s.empty() && imp.jumpStateDelays_s.size() != imp.jumpStates)
+        fail(
+            "impairments.antenna_jumps.state_delays_ns",
+            "lists " + std::to_string(imp.jumpStateDelays_s.size()) + " delays for " +
+                std::to_string(imp.jumpStates) + " states");
+    for (size_t i = 0; i < imp.jumpStateDelays_s.size(); ++i)
+        if (!(std::abs(imp.jumpStateDelays_s[i]) <= 1e-6))
+            fail(
+                "impairments.antenna_jumps.state_delays_ns[" + std::to_string(i) + "]",
+                "must be a number within ±1000 ns");
     for (size_t i = 0; i < imp.jumpAllowedStates.size(); ++i)
         if (imp.jumpAllowedStates[i] >= imp.jumpStates)
             fail(

@@ -195,7 +195,11 @@ void Simulator::rewind(double t_s)
             odometry_.begin(), odometry_.end(), t_s,
             [](const OdometrySample& s, double t) { return s.time_s < t; }) -
         odometry_.begin());
-    for (size_t i = 0; i < tx_.size(); ++i) tx_[i].nextFrame = firstFrameAtOrAfter(i, t_s);
+    for (size_t i = 0; i < tx_.size(); ++i)
+    {
+        tx_[i].nextFrame = firstFrameAtOrAfter(i, t_s);
+        tx_[i].retryTime_s = std::numeric_limits<double>::infinity();
+    }
     streamTime_ = t_s;
 }
 
@@ -221,10 +225,19 @@ bool Simulator::hears(size_t tx) const
            cs.bandwidthMHz == channelFilter_->bandwidthMHz;
 }
 
+double Simulator::retryDelay(size_t tx, uint64_t n) const
+{
+    if (sc_.impairments.retryProbability <= 0) return -1;
+    detail::CounterRng rng(hashKey({sc_.seed, detail::kTagRetry, tx, n}));
+    if (rng.uniform() >= sc_.impairments.retryProbability) return -1;
+    return rng.uniform(20e-6, 7e-3);  // what the muTrack captures show
+}
+
 bool Simulator::next(SimEvent& ev)
 {
     double best = std::numeric_limits<double>::infinity();
     int source = -2;  // -1: odometry, >= 0: transmitter
+    bool retry = false;
     if (odometryEnabled_ && nextOdometry_ < odometry_.size())
     {
         best = odometry_[nextOdometry_].time_s;
@@ -241,6 +254,13 @@ bool Simulator::next(SimEvent& ev)
         {
             best = t;
             source = int(i);
+            retry = false;
+        }
+        if (tx_[i].retryTime_s < best)
+        {
+            best = tx_[i].retryTime_s;
+            source = int(i);
+            retry = true;
         }
     }
     if (source == -2 || best > sc_.duration_s) return false;
@@ -266,7 +286,20 @@ bool Simulator::next(SimEvent& ev)
 
     ev.kind = SimEvent::Kind::Csi;
     if (!ev.csi || ev.csi.use_count() > 1) ev.csi = std::make_shared<CObservationWiFiCSI>();
-    synthesizeFrame(size_t(source), tx_[size_t(source)].nextFrame++, *ev.csi, ev.frame);
+    auto& st = tx_[size_t(source)];
+    if (retry)
+    {
+        synthesizeFrame(size_t(source), st.retryFrame, *ev.csi, ev.frame, 1);
+        st.retryTime_s = std::numeric_limits<double>::infinity();
+        return true;
+    }
+    const uint64_t n = st.nextFrame++;
+    synthesizeFrame(size_t(source), n, *ev.csi, ev.frame);
+    if (const double d = retryDelay(size_t(source), n); d >= 0)
+    {
+        st.retryFrame = n;
+        st.retryTime_s = best + d;
+    }
     return true;
 }
 
@@ -287,7 +320,7 @@ std::vector<PropagationPath> Simulator::pathsAt(size_t tx, const TPose2D& robotP
 }
 
 void Simulator::synthesizeFrame(
-    size_t txIndex, uint64_t n, CObservationWiFiCSI& out, FrameTruth& truth)
+    size_t txIndex, uint64_t n, CObservationWiFiCSI& out, FrameTruth& truth, unsigned reception)
 {
     const TransmitterSpec& tx = sc_.transmitters.at(txIndex);
     const ReceiverSpec& rxSpec = sc_.receiver;
@@ -297,11 +330,13 @@ void Simulator::synthesizeFrame(
     const unsigned nRx = unsigned(rxSpec.array.size());
     const unsigned nTx = tx.streams;
     const double fc = cs.centerFrequencyHz();
-    const double t = frameTime(txIndex, n);
+    const double t =
+        frameTime(txIndex, n) + (reception ? std::max(0.0, retryDelay(txIndex, n)) : 0.0);
 
     // --- geometry and the ideal channel
     truth.transmitterIndex = txIndex;
     truth.frameIndex = n;
+    truth.reception = reception;
     truth.time_s = t;
     truth.robotPose = trajectory_.poseAt(t);
     truth.sensorPose = sensorPoseInWorld(truth.robotPose);
@@ -352,7 +387,10 @@ void Simulator::synthesizeFrame(
     }
 
     // --- per-packet draws (pure function of seed, transmitter, frame)
-    detail::CounterRng rng(hashKey({sc_.seed, detail::kTagFrame, txIndex, n}));
+    // A retry is another reception: its own noise, sampling-time offset and CFO.
+    detail::CounterRng rng(
+        reception ? hashKey({sc_.seed, detail::kTagRetry, txIndex, n, reception})
+                  : hashKey({sc_.seed, detail::kTagFrame, txIndex, n}));
     PacketImpairments& pk = truth.packet;
     pk = PacketImpairments();
     pk.samplingTimeOffset_s = imp.samplingTimeOffsetSigma_s * rng.gaussian();
@@ -380,13 +418,15 @@ void Simulator::synthesizeFrame(
     for (unsigned i = 0; i < nRx; ++i)
     {
         const double gain = agc * dB2amplitude(pk.chainAgc_dB[i]);
-        const double delay = pk.samplingTimeOffset_s;     // baseband: phase −2π·k·Δf·STO
-        const double jump = hardware_.jumpDelay_s(i, t);  // RF: phase −2π·f_k·τ_jump
+        const double delay = pk.samplingTimeOffset_s;  // baseband: phase −2π·k·Δf·STO
+        // RF: phase −2π·f_k·τ_jump; a baseband sample slip: −2π·k·Δf·τ_jump.
+        const double jump = hardware_.jumpDelay_s(i, t);
+        const double jumpFrom = imp.jumpBaseband ? 0.0 : fc;
         const double jumpPhase = hardware_.jumpStatePhase_rad(i, pk.jumpState[i]);
         // Start at the lowest bin and step with one complex multiply per bin.
         std::complex<double> f = std::polar(
             gain, pk.cfoPhase_rad + jumpPhase - 2 * M_PI * (kFirst * kSubcarrierSpacingHz * delay) -
-                      2 * M_PI * std::fmod((fc + kFirst * kSubcarrierSpacingHz) * jump, 1.0));
+                      2 * M_PI * std::fmod((jumpFrom + kFirst * kSubcarrierSpacingHz) * jump, 1.0));
         const std::complex<double> step =
             std::polar(1.0, -2 * M_PI * kSubcarrierSpacingHz * (delay + jump));
         for (unsigned bin = 0; bin < nfft; ++bin)
@@ -523,7 +563,9 @@ void Simulator::writeImpairmentsJson(std::ostream& o) const
     o << "  \"conventions\": \"CSI per chain i is multiplied by 10^(gain_db/20)·exp(j·phase(k)),"
          " phase(k) = phase_offset_rad + Σ_r ripple_amplitude_rad[r]·cos(π·(r+1)·k/(NFFT/2) +"
          " ripple_phase_rad[r]); per packet: exp(-j·2π·k·312.5e3·sto_s + j·cfo_phase_rad), and"
-         " exp(-j·2π·f_k·state·jump_step_s) for a chain in jump state 'state'. Per-packet"
+         " exp(-j·2π·f_k·jump_state_delay_s[state]) for a chain in jump state 'state' (state·"
+         "jump_step_s unless the scenario lists the states' delays; f_k − f_c instead of f_k"
+         " when jump_baseband is true). Per-packet"
          " values are in frames.csv.\",\n";
     o << "  \"hardware\": ";
     hardware_.writeJson(o, channels, 2);

@@ -42,6 +42,9 @@ struct RawlogSummary
         uint64_t frames = 0;
         std::map<std::string, uint64_t> channels;  //!< chanspec text → frames
         unsigned maxRx = 0;
+        /** Receive cores of the rows of its widest frame (CObservationWiFiCSI::rxCores; empty:
+         *  row i is core i). */
+        std::vector<uint8_t> rxCores;
         int minRssi = 127, maxRssi = -128;
     };
     uint64_t csiFrames = 0;

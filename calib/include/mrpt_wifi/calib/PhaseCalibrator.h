@@ -46,6 +46,27 @@ struct CalibrationFrame
  *  without change for a state-unaware calibration. */
 bool removeChainStates(const PhaseCalibration& c, CalibrationFrame& f);
 
+/** Whether a calibration file should list its jump states (wifi-calibrate --chain-states). */
+enum class ChainStatePolicy : uint8_t
+{
+    Auto,    //!< unless every state differs from its reference by a delay alone
+    Always,  //!< whenever the recording showed states
+    Never    //!< a state-unaware file
+};
+/** Parses "auto|on|off"; throws std::invalid_argument naming `what` otherwise. */
+ChainStatePolicy chainStatePolicyFromString(const std::string& s, const std::string& what);
+
+/** Applies the policy to a calibration about to be written: with Auto, a table whose every
+ *  state's phase at the centre frequency equals its reference's within `maxPhase_rad` is
+ *  dropped. Such states are sample slips in the chain's digital front end (the muTrack
+ *  RT-AC86Us: 12.5 ns apart at 20 MHz, phases within 0.4°): the phases hold in every state,
+ *  and over the air a frame's inter-chain delay carries a multipath bias of several ns (tens at
+ *  20 MHz), so it can't be matched to a state measured through cables — a state-aware file
+ *  would withhold bearings from those frames until each state is learnt again. Returns what
+ *  was done, for the user (empty: nothing). */
+std::string applyChainStatePolicy(
+    PhaseCalibration& c, ChainStatePolicy policy, double maxPhase_rad = 3 * M_PI / 180);
+
 /** Preprocessing used for calibration: sub-band sign correction, STO/CFO removal and power
  *  normalisation on; no calibration applied; the firmware-overwritten subcarrier left out. */
 PreprocessOptions calibrationPreprocessOptions();
@@ -67,16 +88,20 @@ public:
     /** Splitter mode: no geometry. */
     RejectReason prepareStatic(const CObservationWiFiCSI& obs, CalibrationFrame& out);
 
-    /** The jump states seen so far (every channel). */
-    std::vector<const ChainStateTracker*> chainStateTrackers() const
-    {
-        return pre_.chainStateTrackers();
-    }
+    /** The jump states seen so far (one tracker per channel and chain count). */
+    std::vector<const ChainStateTracker*> chainStateTrackers() const;
 
 private:
     RejectReason common(const CObservationWiFiCSI& obs, CalibrationFrame& out);
     CsiPreprocessor pre_;
     CleanCsi clean_;
+    // The jump states are classified here, on the preprocessed CSI of the array's elements,
+    // by a tracker that knows the channel's bandwidth (the states and their windows scale
+    // with it: chainStateDelayScale).
+    bool trackStates_ = false;
+    ChainStateOptions stateOptions_;
+    std::map<std::pair<uint32_t, unsigned>, ChainStateTracker> trackers_;
+    std::vector<double> coherence_;
 };
 
 enum class CalibrationMode : uint8_t
@@ -102,7 +127,7 @@ struct CalibratorOptions
 
     // What makes a drive able to determine a calibration (warnings otherwise).
     size_t minFrames = 300;
-    double minDuration_s = 15;
+    double minDuration_s = 15;    //!< drive mode only
     double bearingBin_deg = 10;   //!< histogram of expected bearings ...
     unsigned minBearingBins = 6;  //!< ... needs this many bins with ≥ minBinShare of frames
     double minBinShare = 0.005;

@@ -23,7 +23,12 @@ constexpr double kSpeedOfLightMps = 299792458.0;
  * elements:          # [x, y] metres, port order
  *   - [0.0, 0.0]
  *   - [0.0, 0.052]
+ * cores: [0, 1]      # optional: the receive core of each element (default: element i = core i)
  * \endcode
+ *
+ * `cores` is for a receiver that reports only some of its cores (an RT-AC86U with core mask
+ * 0xb: `cores: [0, 1, 3]`) or whose antennas are wired in another order. Element i then reads
+ * the CSI of core cores[i]; calibration files follow the elements' order.
  *
  * Steering convention (DESIGN.md §5, the simulator's too): a plane wave arriving from direction
  * θ (u = (cos θ, sin θ), pointing from the array towards the source) reaches element i with phase
@@ -38,9 +43,14 @@ struct AntennaArray
     std::string name;
     std::string description;
     std::vector<mrpt::math::TPoint2D> elements;
+    /** Receive core of each element (element i reads core cores[i]); empty: element i is core
+     *  i. */
+    std::vector<unsigned> cores;
     std::string sourcePath;  //!< file it came from ("" if built in code or from text)
 
     size_t size() const { return elements.size(); }
+    /** Receive core that element i reads. */
+    unsigned coreOf(size_t i) const { return i < cores.size() ? cores[i] : unsigned(i); }
 
     /** One isotropic element at the origin (a single-antenna device). */
     static AntennaArray singleElement();

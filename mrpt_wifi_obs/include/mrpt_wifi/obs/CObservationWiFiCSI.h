@@ -39,7 +39,8 @@ const char* toString(NexmonHeaderVariant v);
  *
  * Serialization version 1 adds the source fields below; version 0 rawlogs (all from the
  * BCM4366c0) still load, with source = "bcm4366c0". Version 2 adds the receive chains' jump
- * states (chainDelay_ns, chainState); older rawlogs load with both empty.
+ * states (chainDelay_ns, chainState); older rawlogs load with both empty. Version 3 adds rxCores
+ * (a router reporting only some of its cores); older rawlogs load with it empty (row i = core i).
  */
 class CObservationWiFiCSI : public mrpt::obs::CObservation
 {
@@ -94,6 +95,11 @@ public:
      *  the recorder's summary and, with a state-aware calibration, the calibration file's);
      *  kUnknownChainState (255) where it could not tell; empty when not classified. */
     std::vector<uint8_t> chainState;
+    /** Receive core of each CSI row, ascending (row i holds core rxCores[i]) when the receiver
+     *  reports only some of its cores (an RT-AC86U with core mask 0xb: rows 0, 1, 2 hold cores
+     *  0, 1, 3); empty when row i is core i. Per-row vectors (chainDelay_ns, chainState,
+     *  antennaRssi_dB) follow the rows. */
+    std::vector<uint8_t> rxCores;
     /** @} */
 
     /** Sets the shape and zero-fills the CSI; clears presentMask. */
@@ -105,6 +111,12 @@ public:
         return (presentMask >> (tx * kMaxChains + rx)) & 1u;
     }
     void setPresent(unsigned tx, unsigned rx, bool present = true);
+    /** Receive core of CSI row `row` (rxCores, or the row itself). */
+    unsigned coreOfRow(unsigned row) const { return row < rxCores.size() ? rxCores[row] : row; }
+    /** CSI row holding receive core `core`, or −1 when the frame has no row for it. */
+    int rowOfCore(unsigned core) const;
+    /** The receive cores the rows hold, e.g. "0, 1, 3". */
+    std::string rowCoresAsString() const;
     /** Number of (tx, rx) pairs that arrived. */
     unsigned presentPairs() const;
     bool isComplete() const { return presentPairs() == unsigned(nRx) * nTx; }

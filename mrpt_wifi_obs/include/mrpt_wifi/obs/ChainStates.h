@@ -12,11 +12,15 @@
 
 /** The receive chains' jump states.
  *
- * The BCM4366c0 (RT-AC86U) switches the delay between its receive chains among a few values
- * (steps of about 3 ns; nexmon_csi issues #82, #219, #348, #393), each state with its own phase.
- * A 3 ns step turns the phase across 80 MHz by ~1.5 rad from band edge to band edge, while a
- * path's delay difference across a 7.8 cm array is below 0.26 ns: so each frame's inter-chain
- * delay tells its state, and a calibration per state removes the jump. */
+ * The BCM4366c0 (RT-AC86U) switches the delay between its receive chains among a few values,
+ * each state with its own phase. The steps are about a quarter of the sample period: ~3 ns at
+ * 80 MHz (nexmon_csi issues #82, #219, #348, #393), ~12.5 ns at 20 MHz (one 80 MHz sample;
+ * measured on the muTrack splitter captures: states −21, −9, +4, +16 ns). A step turns the phase
+ * across the band by ~1.5 rad from band edge to band edge at any bandwidth, while a path's delay
+ * difference across a 7.8 cm array is below 0.26 ns: so each frame's inter-chain delay tells
+ * its state, and a calibration per state removes the jump. The per-frame delay noise scales
+ * the same way (1/bandwidth), so every delay window here is given for 80 MHz and scaled by
+ * 80/bandwidth (chainStateDelayScale). */
 namespace mrpt_wifi
 {
 class CObservationWiFiCSI;
@@ -24,6 +28,12 @@ struct SubcarrierLayout;
 
 /** A chain whose state a frame could not tell (too little coherent energy). */
 constexpr uint8_t kUnknownChainState = 255;
+
+/** How much wider the jump states and the delay windows are at `bandwidthMHz` than at 80 MHz:
+ *  80 / bandwidth (4 at 20 MHz); 1 for 0 (unknown). */
+double chainStateDelayScale(unsigned bandwidthMHz);
+/** The bandwidth [MHz] a list of subcarriers k spans: 20, 40, 80 or 160 (by the largest |k|). */
+unsigned bandwidthOfSubcarriers(const std::vector<int>& k);
 
 /** Per-frame delay of each receive chain relative to chain 0, from the cross spectrum
  *  z_k = Σ_m h_{m,i}(k)·h_{m,0}(k)^* over the subcarriers k (common sampling-time offset and
@@ -33,7 +43,8 @@ constexpr uint8_t kUnknownChainState = 255;
  *  which stays with the main path under multipath; weaker ones the delay profile
  *  |Σ_k z_k·e^{j2π·Δf·k·τ}| (within ±25 ns), where all subcarriers add coherently: at 10 dB the
  *  slope strays by 1.6 ns (median; p90 9 ns), the profile by 0.6 ns (p90 1.7 ns; development
- *  rooms, 80 MHz). H rows are stream·nRx + rx, columns the subcarriers `k` (ascending). */
+ *  rooms, 80 MHz). The windows scale with 80/bandwidth (±100 ns at 20 MHz), the bandwidth told
+ *  by the subcarriers. H rows are stream·nRx + rx, columns the subcarriers `k` (ascending). */
 void measureChainDelays(
     const Eigen::Ref<const Eigen::MatrixXcf>& H, unsigned nRx, const std::vector<int>& k,
     std::vector<double>& delays_s, std::vector<double>& coherence);
@@ -98,11 +109,13 @@ struct ChainStateInfo
  *  rooms, 80 MHz, 10–25 dB). The states persist for seconds, so each chain runs a hidden-Markov
  * forward filter over its states with a heavy-tailed likelihood, and a frame gets a state only when
  *  the filter is confident; otherwise it is "unknown" (no bearing from it when a state-aware
- *  calibration is in use). */
+ *  calibration is in use). The delays below are for 80 MHz: the tracker multiplies them by
+ *  chainStateDelayScale(bandwidth) (×4 at 20 MHz, where states are ~12.5 ns apart). */
 struct ChainStateOptions
 {
     /** A delay farther than this from every known state counts towards a new state (the jumps
-     *  are ~3 ns apart); also the matching tolerance of calibration files made with it. */
+     *  are ~3 ns apart at 80 MHz); also the matching tolerance of calibration files made with
+     *  it. */
     double tolerance_s = 1.5e-9;
     double measurementSigma_s = 0.7e-9;  //!< Cauchy scale of the per-frame likelihood
     double outlierShare = 0.1;           //!< its uniform floor (over ±30 ns)
@@ -146,16 +159,26 @@ class ChainStateTracker
 {
 public:
     ChainStateTracker() = default;
-    /** nRx chains; `cal` (may be null) seeds the states it knows. */
-    ChainStateTracker(unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o = {});
+    /** nRx chains; `cal` (may be null) seeds the states it knows; `bandwidthMHz` scales the
+     *  options' delay windows (chainStateDelayScale). 0: the calibration's bandwidth, or the
+     *  options as given (80 MHz) without a calibration. */
+    ChainStateTracker(
+        unsigned nRx, const PhaseCalibration* cal, ChainStateOptions o = {},
+        unsigned bandwidthMHz = 0);
 
     unsigned chains() const { return unsigned(states_.size()); }
+    /** The options in use: delay windows scaled to the bandwidth. */
     const ChainStateOptions& options() const { return opts_; }
+    /** The bandwidth the delay windows are scaled for [MHz]. */
+    unsigned bandwidthMHz() const { return bandwidthMHz_; }
     /** A calibration is in use. */
     bool calibrated() const { return calibrated_; }
     /** The calibration knows its states: corrections are applied, and frames whose state is
      *  unknown or unresolved give no bearing. Otherwise states are only reported. */
     bool applies() const { return calibrated_ && stateAware_; }
+    /** The calibration's recording showed states that differ by a delay alone (none listed,
+     *  none needed). */
+    bool delayOnlyCalibration() const { return delayOnlyCalibration_; }
 
     /** The state id of every chain for one frame's measured delays (chain 0: 0). A chain
      *  measured with too little coherence gets kUnknownChainState; a delay that fits no known
@@ -211,8 +234,11 @@ private:
     std::vector<ChainFilter> filters_;
 
     ChainStateOptions opts_;
+    unsigned bandwidthMHz_ = 80;
+    double outlierSpan_s_ = 60e-9;  //!< width of the likelihood's uniform floor
     bool calibrated_ = false, stateAware_ = false;
     std::string calibrationName_;
+    bool delayOnlyCalibration_ = false;  //!< its recording's states differed by a delay alone
     std::vector<std::vector<ChainStateInfo>> states_;  //!< [chain]
     std::vector<uint8_t> last_;                        //!< previous state per chain
     std::vector<uint64_t> changes_;

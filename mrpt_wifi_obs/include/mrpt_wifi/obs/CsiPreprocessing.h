@@ -93,10 +93,13 @@ enum class RejectReason : uint8_t
     SingleAntenna,       //!< one receive antenna (e.g. an ESP32): no angle of arrival
     /** Calibrated, but a chain is in a jump state the calibration lacks (phase not learnt
      *  yet) or its state could not be measured in this frame. */
-    UnknownChainState
+    UnknownChainState,
+    /** A receive core the array reads (AntennaArray::coreOf) is not in the frame: a router
+     *  reporting only some cores, with an array file that doesn't name them. */
+    MissingCore
 };
 const char* toString(RejectReason r);
-constexpr size_t kRejectReasonCount = 9;
+constexpr size_t kRejectReasonCount = 10;
 
 /** One CSI frame after preprocessing: the complete streams only, on the layout's subcarriers,
  *  sign-corrected, calibrated, without sampling-time offset, power-normalised. */
@@ -219,8 +222,17 @@ public:
     std::shared_ptr<const SubcarrierLayout> layoutFor(const CObservationWiFiCSI& in);
 
     /** Checks before any processing that the array and the calibration fit a frame of this
-     *  shape; throws CalibrationError / std::invalid_argument with a clear message. */
-    void checkCompatible(const Chanspec& cs, unsigned nRx);
+     *  shape (channel, receive chains, their cores); throws CalibrationError /
+     *  std::invalid_argument with a clear message. */
+    void checkCompatible(
+        const Chanspec& cs, unsigned nRx, const std::vector<uint8_t>& rxCores = {});
+
+    /** The CSI row each array element reads in a frame (element i: the row of core
+     *  rxArray().coreOf(i)); all elements when the array names its cores, else one per row of
+     *  the frame. Returns ArrayMismatch or MissingCore when the frame doesn't fit. */
+    RejectReason elementRows(const CObservationWiFiCSI& in, std::vector<unsigned>& rows) const;
+    /** Why a frame's receive cores don't fit the array, with what to do; empty if they fit. */
+    std::string coreMismatchMessage(const CObservationWiFiCSI& in) const;
 
     /** Per-packet phase slope across subcarriers [rad per subcarrier index], from the products
      *  of neighbouring subcarriers summed over the given rows (robust: no unwrapping). Sparse
@@ -260,6 +272,7 @@ private:
      *  sets f.stateDoubt_rad for those not confirmed yet. */
     void verifyChainStates(ChannelCache& cache, CleanCsi& f);
     std::vector<double> chainCoherence_;  //!< scratch
+    std::vector<unsigned> rows_;          //!< scratch: CSI row of each array element
     struct TransmitterCache
     {
         const PhaseCalibration* calibration = nullptr;

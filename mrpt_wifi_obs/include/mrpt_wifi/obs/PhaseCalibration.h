@@ -118,6 +118,10 @@ struct PhaseCalibration
     /** Receiver: the jump states the calibration knows (empty: state-unaware). */
     std::vector<ChainStateCalibration> chainStates;
     double chainStateTolerance_s = 1.0e-9;
+    /** Receiver: the calibration recording showed jump states that differ by a delay alone (a
+     *  sample slip, as on real RT-AC86Us), so they are not listed: the phases hold in every
+     *  state (`chain_states_delay_only: true`, version 3). */
+    bool chainStatesDelayOnly = false;
 
     /** The state entry of (antenna, state), or nullptr. */
     const ChainStateCalibration* findChainState(unsigned antenna, uint8_t state) const;

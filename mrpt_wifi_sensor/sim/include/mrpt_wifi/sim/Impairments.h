@@ -60,7 +60,11 @@ public:
     /** Delay [s] and own constant phase [rad] (ImpairmentSpec::jumpStatePhase, else 0) of
      *  chain `rx` in jump state `state`: the chain's CSI is multiplied by
      *  e^{−j·2π·f_k·delay}·e^{j·phase}. */
-    double jumpStateDelay_s(uint8_t state) const { return state * spec_.jumpStep_s; }
+    double jumpStateDelay_s(uint8_t state) const
+    {
+        return spec_.jumpStateDelays_s.empty() ? state * spec_.jumpStep_s
+                                               : spec_.jumpStateDelays_s.at(state);
+    }
     double jumpStatePhase_rad(unsigned rx, uint8_t state) const;
     const ImpairmentSpec& spec() const { return spec_; }
     const std::vector<JumpEvent>& jumpEvents(unsigned rx) const { return jumps_.at(rx); }

@@ -189,12 +189,24 @@ struct ImpairmentSpec
     double snrCap_dB = 35.0;
     std::optional<double> fixedSnr_dB;  //!< overrides the link budget's SNR when set
     double timingJitter = 0.3;          //!< frame time jitter, fraction of the frame period (< 1)
+    /** Share of frames received a second time, as an 802.11 retry: the same sequence number,
+     *  0.02–7 ms later, its own noise, sampling-time offset and CFO (real RT-AC86Us: 4.5 % of
+     *  the muTrack D1 frames). */
+    double retryProbability = 0.0;
 
     // 4366c0 inter-antenna jump states: each chain except 0 sits in one of `jumpStates`
     // delay states (0, step, 2·step, ...), switching at random (Poisson) times.
     bool antennaJumps = false;
     unsigned jumpStates = 3;
     double jumpStep_s = 3e-9;
+    /** The states' delays, when not evenly stepped from 0 (`state_delays_ns`): e.g. the
+     *  −20.9, −9.0, +4.1, +16.0 ns a real RT-AC86U chain shows at 20 MHz. Non-empty: its size is
+     *  `jumpStates` and `jumpStep_s` is unused. */
+    std::vector<double> jumpStateDelays_s;
+    /** The delays are sample slips in the chain's digital front end (`baseband: true`): phase
+     *  −2π·k·Δf·τ, the phase at the centre frequency unchanged, as the muTrack RT-AC86Us show
+     *  (states' centre phases within 0.4°); false: a delay of the RF signal, −2π·f_k·τ. */
+    bool jumpBaseband = false;
     double jumpRate_Hz = 0.2;
     /** Each state of each chain also has its own constant phase (uniform, fixed per boot), as
      *  real units report, on top of the phase its delay gives at the carrier. */

@@ -10,6 +10,7 @@
 #include <mrpt_wifi/sim/Scenario.h>
 #include <mrpt_wifi/sim/Trajectory.h>
 
+#include <limits>
 #include <optional>
 #include <ostream>
 #include <vector>
@@ -21,6 +22,8 @@ struct FrameTruth
 {
     size_t transmitterIndex = 0;
     uint64_t frameIndex = 0;  //!< n-th frame of that transmitter since t = 0
+    /** 0: the frame's first reception; 1: its 802.11 retry (impairments.retryProbability). */
+    unsigned reception = 0;
     uint16_t sequenceNumber = 0;
     double time_s = 0;               //!< since the scenario start
     mrpt::math::TPose2D robotPose;   //!< world frame, robot base
@@ -106,9 +109,15 @@ public:
     /** Index of the first frame of `tx` at or after time t. */
     uint64_t firstFrameAtOrAfter(size_t tx, double t_s) const;
 
-    /** Synthesizes frame n of transmitter tx into `out` (reusing its storage) with its truth.
-     *  Independent of the stream position and the channel filter. */
-    void synthesizeFrame(size_t tx, uint64_t n, CObservationWiFiCSI& out, FrameTruth& truth);
+    /** Synthesizes frame n of transmitter tx into `out` (reusing its storage) with its truth;
+     *  `reception` 1: its 802.11 retry (same sequence number, retryDelay() later, its own
+     *  noise, sampling-time offset and CFO). Independent of the stream position and the
+     *  channel filter. */
+    void synthesizeFrame(
+        size_t tx, uint64_t n, CObservationWiFiCSI& out, FrameTruth& truth, unsigned reception = 0);
+    /** How long after frame n of tx its retry arrives [s], or a negative value when it has
+     *  none. */
+    double retryDelay(size_t tx, uint64_t n) const;
 
     /** Paths of the current geometry for a transmitter and robot pose (for tests/plots). */
     std::vector<PropagationPath> pathsAt(size_t tx, const mrpt::math::TPose2D& robotPose) const;
@@ -126,6 +135,9 @@ private:
         double framePeriod_s = 0;
         double phase_s = 0;      //!< time of frame 0
         uint64_t nextFrame = 0;  //!< stream position
+        /** The retry of frame retryFrame due at retryTime_s (infinity: none pending). */
+        double retryTime_s = std::numeric_limits<double>::infinity();
+        uint64_t retryFrame = 0;
         TransmitterHardware hardware;
     };
 
