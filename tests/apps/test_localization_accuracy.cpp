@@ -65,7 +65,7 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     test::TempDir tmp;
     const auto r = test::run(
         test::binDir() +
-        "/localization-accuracy --rooms 1 --first-seed 7 -d 40 --laps 2 -n 1000 --live-seeds 2 "
+        "/localization-accuracy --rooms 1 --first-seed 7 -d 40 --laps 2 -n 1000 --live-seeds 1 "
         "-w " +
         tmp.file("work"));
     ASSERT_EQ(r.exitCode, 0) << r.output;
@@ -82,8 +82,8 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     // targets are tighter; these bounds catch a broken chain, not a small regression).
     EXPECT_LE(number(room, "offline_odo_median_m"), 1.0) << r.output;
     EXPECT_TRUE(std::isfinite(number(room, "offline_noodo_worst_all_m"))) << r.output;
-    // Offline, three filter seeds per run (the default), live two (--live-seeds 2): the room's
-    // figure is their median (of two, the lower).
+    // Offline, three filter seeds per run (the default): the room's figure is their median;
+    // live one (--live-seeds 1, to keep the suite's wall time: each live run is real time).
     const auto perRun = [&](const std::string& column)
     {
         std::string cell = room.at(column);
@@ -97,7 +97,7 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
         for (const std::string run : {"odo", "noodo"})
         {
             auto runs = perRun(kind + "_" + run + "_runs_m");
-            ASSERT_EQ(runs.size(), kind == "offline" ? 3u : 2u) << kind << " " << run;
+            ASSERT_EQ(runs.size(), kind == "offline" ? 3u : 1u) << kind << " " << run;
             std::sort(runs.begin(), runs.end());
             EXPECT_DOUBLE_EQ(
                 runs[kind == "offline" ? 1 : 0], number(room, kind + "_" + run + "_median_m"))
@@ -108,13 +108,12 @@ TEST(LocalizationAccuracy, EvaluatesOneRoomEndToEnd)
     for (const std::string run : {"odo", "noodo"})
     {
         const auto lags = perRun("live_" + run + "_lag_p99_ms");
-        ASSERT_EQ(lags.size(), 2u) << run;
+        ASSERT_EQ(lags.size(), 1u) << run;
         for (const double lag : lags) EXPECT_GE(lag, 0.0) << run;
     }
     EXPECT_TRUE(
         std::filesystem::exists(tmp.file("work/room-7/pf-odometry-seed3/estimate_tum.txt")));
-    EXPECT_TRUE(
-        std::filesystem::exists(tmp.file("work/room-7/live-no-odometry-seed2/estimate_tum.txt")));
+    EXPECT_TRUE(std::filesystem::exists(tmp.file("work/room-7/live-no-odometry/estimate_tum.txt")));
     // Live runs on the wall clock (a busy machine batches more bearings per filter step): only
     // that both ran on the streamed room and, with odometry, stayed near it (7.1 × 7.7 m).
     EXPECT_LE(number(room, "live_odo_worst_all_m"), 10.0) << r.output;
