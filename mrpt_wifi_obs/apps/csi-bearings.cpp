@@ -273,7 +273,8 @@ int main(int argc, char** argv)
             cli::Progress progress("csi-bearings", !argQuiet.getValue());
             // Frames per (channel, receive cores): a channel is refused only when none of its
             // shapes fits (the first frame of a transmitter may lack a core lost on the way).
-            std::map<uint16_t, std::map<std::vector<uint8_t>, uint64_t>> shapes;
+            std::map<uint16_t, std::map<std::pair<unsigned, std::vector<uint8_t>>, uint64_t>>
+                shapes;
             uint64_t csiTotal = 0;
             forEachRawlogObject(
                 argIn.getValue(),
@@ -284,10 +285,7 @@ int main(int argc, char** argv)
                         if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
                         {
                             ++csiTotal;
-                            std::vector<uint8_t> cores;
-                            for (unsigned i = 0; i < c->nRx; ++i)
-                                cores.push_back(uint8_t(c->coreOfRow(i)));
-                            ++shapes[c->chanspec.raw][cores];
+                            ++shapes[c->chanspec.raw][{c->nRx, c->rxCores}];
                         }
                     };
                     if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj))
@@ -302,17 +300,16 @@ int main(int argc, char** argv)
             {
                 const auto cs = Chanspec::decode(raw);
                 if (!cs) continue;
-                std::vector<std::pair<uint64_t, std::vector<uint8_t>>> ranked;
-                for (const auto& [cores, n] : byCores) ranked.emplace_back(n, cores);
+                std::vector<std::pair<uint64_t, std::pair<unsigned, std::vector<uint8_t>>>> ranked;
+                for (const auto& [shape, n] : byCores) ranked.emplace_back(n, shape);
                 std::sort(ranked.rbegin(), ranked.rend());
                 std::exception_ptr firstError;
-                for (const auto& [n, cores] : ranked)
+                for (const auto& [n, shape] : ranked)
                 {
                     try
                     {
                         // Throws with a clear message.
-                        processor.preprocessor().checkCompatible(
-                            *cs, unsigned(cores.size()), cores);
+                        processor.preprocessor().checkCompatible(*cs, shape.first, shape.second);
                         firstError = nullptr;
                         break;
                     }

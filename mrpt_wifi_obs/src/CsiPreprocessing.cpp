@@ -349,10 +349,9 @@ void CsiPreprocessor::checkCompatible(
     CObservationWiFiCSI shape;
     shape.nRx = uint8_t(nRx);
     shape.rxCores = rxCores;
-    const std::string mismatch = coreMismatchMessage(shape);
-    if (!mismatch.empty()) throw std::invalid_argument(mismatch);
     std::vector<unsigned> rows;
-    elementRows(shape, rows);
+    if (elementRows(shape, rows) != RejectReason::Accepted)
+        throw std::invalid_argument(coreMismatchMessage(shape));
     CObservationWiFiCSI standard;
     standard.chanspec = cs;
     // Throws for an unsupported bandwidth, then CalibrationError for a mismatching calibration.

@@ -369,7 +369,8 @@ void CsiFrameAssembler::emit(Transmitter& t, size_t openIndex)
     OpenFrame f = std::move(t.open[openIndex]);
     t.open.erase(t.open.begin() + std::ptrdiff_t(openIndex));
     t.shapeKnown = true;  // a whole frame went by: its streams and cores are what the AP sends
-    const uint64_t expected = pairMask(expectedCores(t, f), t.streamsSeen);
+    const uint8_t expectedMask = expectedCores(t, f);
+    const uint64_t expected = pairMask(expectedMask, t.streamsSeen);
     if ((f.obs->presentMask & expected) == expected)
         ++stats_.framesComplete;
     else
@@ -381,7 +382,7 @@ void CsiFrameAssembler::emit(Transmitter& t, size_t openIndex)
     // Keep the rows of the cores that arrived or were expected: a router reporting cores
     // 0, 1, 3 gives three rows, not four with one always missing.
     auto& obs = *f.obs;
-    uint8_t keep = expectedCores(t, f);
+    uint8_t keep = expectedMask;
     for (unsigned m = 0; m < obs.nTx; ++m)
         keep |= uint8_t((obs.presentMask >> (m * CObservationWiFiCSI::kMaxChains)) & 0xFF);
     keep &= uint8_t((1u << obs.nRx) - 1);
