@@ -45,10 +45,11 @@ asan_skip="TxChainCalibration[.](AodOnlyWhereCalibratedAndHonestSigma|ReceiverFr
 asan_targets="test_obs test_sensor_decoding test_csi_sources test_live_sources test_driver_units test_live_bearings test_emulator_unit test_live_units test_sim test_bearings test_source_bearings test_calib test_tx_calib test_localization test_sar test_input_robustness"
 # The decoders' length-check seeds and the text readers' seeds, replayed instrumented
 # (FuzzSeeds.*).
-asan_targets="$asan_targets fuzz_make_seeds fuzz_replay_nexmon fuzz_replay_intel5300 fuzz_replay_esp32 fuzz_replay_atheros fuzz_replay_rosmessages fuzz_replay_textinputs"
+asan_targets="$asan_targets fuzz_make_seeds fuzz_replay_nexmon fuzz_replay_intel5300 fuzz_replay_esp32 fuzz_replay_atheros fuzz_replay_rosmessages fuzz_replay_rosbag2 fuzz_replay_textinputs"
 # The fuzz time is split evenly between the targets (the assembler, one per file decoder, the
-# ROS messages, the localization programs' text readers), so the total stays FUZZ_SECONDS.
-fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros fuzz_ros_messages fuzz_text_inputs"
+# ROS 1 messages, the ROS 2 bag reader, the localization programs' text readers), so the total
+# stays FUZZ_SECONDS.
+fuzz_targets="fuzz_nexmon_assembler fuzz_decoder_nexmon fuzz_decoder_intel5300 fuzz_decoder_esp32 fuzz_decoder_atheros fuzz_ros_messages fuzz_rosbag2 fuzz_text_inputs"
 san_built=false
 if CC=clang CXX=clang++ cmake -S . -B build-san -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "${debug_lines[@]}" \
      -DMRPT_WIFI_SANITIZE=ON -DMRPT_WIFI_FUZZ=ON -DMRPT_WIFI_BUILD_BENCHMARKS=OFF \
@@ -65,7 +66,7 @@ fi
 
 n_fuzz_targets=$(wc -w <<<"$fuzz_targets")
 per_target=$(( FUZZ_SECONDS / n_fuzz_targets > 0 ? FUZZ_SECONDS / n_fuzz_targets : 1 ))
-echo "== [3/3] libFuzzer: Nexmon assembler, nexmon/intel5300/esp32/atheros decoders, ROS messages, text inputs: ${per_target} s each"
+echo "== [3/3] libFuzzer: Nexmon assembler, nexmon/intel5300/esp32/atheros decoders, ROS messages, ROS 2 bags, text inputs: ${per_target} s each"
 if $san_built; then
   for target in $fuzz_targets; do
     corpus=build-san/corpus-$target
@@ -77,6 +78,7 @@ if $san_built; then
       fuzz_decoder_esp32) cp tests/data/esp32/csi_data.csv "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" esp32 tests/data ;;
       fuzz_decoder_atheros) cp tests/data/atheros/*.dat "$corpus"/ && build-san/bin/fuzz_make_seeds "$corpus" atheros tests/data ;;
       fuzz_ros_messages) build-san/bin/fuzz_make_seeds "$corpus" rosmessages tests/data ;;
+      fuzz_rosbag2) build-san/bin/fuzz_make_seeds "$corpus" rosbag2 tests/data ;;
       fuzz_text_inputs) build-san/bin/fuzz_make_seeds "$corpus" text share ;;
     esac
     # tests/fuzz/fuzz_csi_decoder.cpp says why non-capture inputs are read as this project's

@@ -683,6 +683,9 @@ int main(int argc, char** argv)
                 std::max<uint64_t>(1, summary.csiFrames / 3000);  // enough for a verdict
             std::map<std::string, uint64_t> rejected;
             uint64_t noPose = 0, accepted = 0;
+            // Per channel, the access points whose frames were used (the summary names a
+            // channel left without calibration, and why).
+            std::map<std::string, std::map<MacAddress, uint64_t>> usedOn;
             CalibrationFrame frame;
             cli::Progress p2("wifi-calibrate: reading", !argQuiet.getValue());
             readRawlog(
@@ -712,6 +715,7 @@ int main(int argc, char** argv)
                         return;
                     }
                     ++accepted;
+                    ++usedOn[frame.chanspec.asString()][obs.transmitter];
                     if (checking)
                     {
                         const uint32_t k = (uint32_t(frame.chanspec.centerChannel) << 16) |
@@ -787,6 +791,7 @@ int main(int argc, char** argv)
 
             // ---- Calibrate each channel ---------------------------------------------------
             int rc = 0;
+            std::map<std::string, std::string> outcome;  // channel -> written / why not
             if (calibrator.channels().empty())
                 throw std::runtime_error(
                     "no frame could be grouped by the receive chains' jump states (a chain's "
@@ -858,6 +863,7 @@ int main(int argc, char** argv)
                     toWrite.saveYamlFile(path);
                     std::cout << "  written          : " << path
                               << (res.determined() ? "" : " (forced despite the warnings)") << "\n";
+                    outcome[cs.asString()] = "written " + path;
                 }
                 else
                 {
@@ -865,10 +871,56 @@ int main(int argc, char** argv)
                               << " (the drive cannot determine the calibration, see the warnings;"
                                  " --force writes it anyway)\n";
                     rc = 2;
+                    outcome[cs.asString()] =
+                        "NOT written: " +
+                        (res.warnings.empty() ? std::string("see above") : res.warnings.front());
                 }
                 if (argReport.isSet())
                     for (const auto& png : writeCalibrationReport(res, argReport.getValue()))
                         std::cout << "  report           : " << png << "\n";
+            }
+
+            // ---- Every channel of the recording, with the access points used there --------
+            std::map<std::string, std::map<MacAddress, uint64_t>> heardOn;
+            for (const auto& [mac, src] : summary.transmitters)
+                for (const auto& [cs, n] : src.channels) heardOn[cs][mac] += n;
+            if (heardOn.size() > 1 || outcome.size() > 1)
+            {
+                std::cout << "\nChannels (" << heardOn.size() << " in the recording):\n";
+                for (const auto& [cs, macs] : heardOn)
+                {
+                    if (onlyChannel && !Chanspec::fromString(cs).sameChannel(*onlyChannel))
+                        continue;
+                    std::string aps;
+                    for (const auto& [mac, n] : usedOn[cs])
+                        aps += (aps.empty() ? "" : ", ") + mac.asString() + " (" +
+                               std::to_string(n) + " frames)";
+                    const auto it = outcome.find(cs);
+                    std::string line;
+                    if (it != outcome.end())
+                        line = it->second + "; from " + std::to_string(usedOn[cs].size()) +
+                               " access point" + (usedOn[cs].size() == 1 ? "" : "s") + ": " + aps;
+                    else
+                    {
+                        // Heard, but nothing to calibrate it from: say which APs and why.
+                        std::string heard, unlisted;
+                        for (const auto& [mac, n] : macs)
+                        {
+                            heard += (heard.empty() ? "" : ", ") + mac.asString() + " (" +
+                                     std::to_string(n) + " frames)";
+                            if (!use.count(mac))
+                                unlisted += (unlisted.empty() ? "" : ", ") + mac.asString();
+                        }
+                        line = "NOT calibrated: heard " + heard + "; " +
+                               (!unlisted.empty()
+                                    ? "not used (not in --transmitters, or another --mac): " +
+                                          unlisted + "; add their positions to calibrate " + cs
+                                    : "every frame was rejected (see the counts above)");
+                        std::cerr << "wifi-calibrate: channel " << cs << ": " << line << "\n";
+                    }
+                    std::cout << "  " << std::setw(8) << std::left << cs << std::right << ": "
+                              << line << "\n";
+                }
             }
 
             // ---- Transmit chains of each access point ---------------------------------------

@@ -14,8 +14,11 @@
 
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
+
+#include "McapOutput.h"
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
@@ -106,6 +109,8 @@ int main(int argc, char** argv)
                 "o", "out-dir", "Output folder", false, "wifi-graphslam-out", "DIR", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
             TCLAP::SwitchArg argVerbose("v", "verbose", "Ceres progress", cmd);
+            TCLAP::ValueArg<std::string> argMcap(
+                "", "mcap", mcap_output::optionHelp(), false, "", "OUT.mcap", cmd);
 
             cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
             if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
@@ -172,6 +177,7 @@ int main(int argc, char** argv)
             std::cerr << "wifi-graphslam: " << in.bearings.size() << " bearings, "
                       << in.odometry.size() << " odometry poses, APs "
                       << (opt.apsKnown ? "known" : "estimated") << "; solving...\n";
+            opt.progress = [](const std::string& line) { std::cerr << "  " << line << "\n"; };
             auto res = solveBearingGraph(in, opt);
             res.warnings.noAngle += csvWarn.noAngle;
 
@@ -182,6 +188,10 @@ int main(int argc, char** argv)
             std::ofstream(outDir + "/aps.yaml")
                 << "# APs after wifi-graphslam (" << (opt.apsKnown ? "fixed" : "estimated") << ")\n"
                 << res.aps.asYamlText();
+            if (argMcap.isSet())
+                mcap_output::writeTrajectory(
+                    argMcap.getValue(), res.poses, nullptr, in.bearings, &res.aps, nullptr,
+                    !opt.apsKnown && res.apCov.size() == res.aps.size() ? &res.apCov : nullptr);
 
             std::ostringstream sum;
             sum << "wifi-graphslam summary\n"
@@ -237,6 +247,16 @@ int main(int argc, char** argv)
             }
             sum << "  time      : solve " << res.solveTime_s << " s, total " << res.totalTime_s
                 << " s\n";
+            {
+                // Where the time went (own stream: fixed notation would stick to `sum`).
+                std::ostringstream phases;
+                phases << std::fixed << std::setprecision(2);
+                for (size_t i = 0; i < res.phases.size(); ++i)
+                    phases << (i ? ", " : " ") << res.phases[i].name << " " << res.phases[i].seconds
+                           << " s";
+                sum << "  phases    :" << phases.str();
+            }
+            sum << "; " << res.apTriangulations << " AP triangulations\n";
             if (argGt.isSet())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -20,6 +20,8 @@
 #include <set>
 #include <sstream>
 
+#include "McapOutput.h"
+
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
 
@@ -116,6 +118,8 @@ int main(int argc, char** argv)
                 "o", "out-dir", "Output folder", false, "wifi-iot-out", "DIR", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
+            TCLAP::ValueArg<std::string> argMcap(
+                "", "mcap", mcap_output::optionHelp(), false, "", "OUT.mcap", cmd);
 
             cli::JoinedArgv joined(argc, argv, "--sensor-pose", 6);
             cli::JoinedArgv args(
@@ -210,6 +214,9 @@ int main(int argc, char** argv)
                     std::cerr << "wifi-iot-map: " << bearings.size() << " bearings on "
                               << odo.size()
                               << " odometry poses: devices and trajectory jointly...\n";
+                if (!argQuiet.getValue())
+                    go.progress = [](const std::string& line)
+                    { std::cerr << "  " << line << "\n"; };
                 jointRes = solveBearingGraph(in, go);
                 traj = jointRes.poses;
                 jointRes.poses.saveTum(
@@ -289,6 +296,15 @@ int main(int argc, char** argv)
             progress.done(std::to_string(devs.size()) + " devices");
             saveDeviceCsv(outDir + "/devices.csv", devs);
             saveDeviceYaml(outDir + "/devices.yaml", devs);
+            if (argMcap.isSet())
+            {
+                // Rays end at the device they measure.
+                TransmitterMap deviceMap;
+                const auto devices = mcap_output::devicesOf(devs, &deviceMap);
+                mcap_output::writeTrajectory(
+                    argMcap.getValue(), traj, nullptr, bearings, nullptr, &devices, nullptr,
+                    &deviceMap);
+            }
 
             std::ostringstream sum;
             sum << "wifi-iot-map summary\n  input   : " << bearings.size() << " bearings, "

@@ -60,6 +60,8 @@
 #include <set>
 #include <thread>
 
+#include "McapOutput.h"
+
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
 using Clock = std::chrono::steady_clock;
@@ -628,6 +630,8 @@ int main(int argc, char** argv)
                 "", "screenshot", "With --view: save the window to this PNG at the end", false, "",
                 "FILE.png", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No status lines", cmd);
+            TCLAP::ValueArg<std::string> argMcap(
+                "", "mcap", mcap_output::optionHelp(), false, "", "OUT.mcap", cmd);
             TCLAP::SwitchArg argKeepWaiting(
                 "", "keep-waiting",
                 "When no usable CSI arrives for [wifi-localize] no_csi_timeout_s (default 20 s; 0 "
@@ -707,6 +711,11 @@ int main(int argc, char** argv)
                    << std::flush;
             std::unique_ptr<RawlogWriter> rawlog;
             if (argRawlog.isSet()) rawlog = std::make_unique<RawlogWriter>(argRawlog.getValue());
+            // --mcap: each pose output with its covariance as it is made (closed at the end).
+            std::unique_ptr<ros2::LocalizationMcap> mcapOut;
+            if (argMcap.isSet())
+                mcapOut = std::make_unique<ros2::LocalizationMcap>(argMcap.getValue(), true);
+            double mcapRaysUntil = -std::numeric_limits<double>::infinity();
 
             // ---- sensors: every section with a `driver`, as rawlog-grabber does
             // Declared before the sensors: their threads read it until they are joined, also
@@ -810,6 +819,23 @@ int main(int argc, char** argv)
                 covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","
                        << fmt(mrpt::RAD2DEG(m.phi), 3) << "," << covarianceCsvCells(c) << ","
                        << covarianceCsvCells(u.particles) << std::endl;
+                if (mcapOut)
+                {
+                    const auto& txMap = loc.wifiMap().transmitters();
+                    if (poseOutputs == 1) mcapOut->transmitters(t, mcap_output::landmarksOf(txMap));
+                    std::array<double, 9> c9;
+                    for (int i = 0; i < 9; ++i) c9[size_t(i)] = c(i / 3, i % 3);
+                    mcapOut->pose(t, m.x, m.y, m.phi, &c9);
+                    // The bearings since the previous pose, from this one.
+                    mcap_output::Rays rays;
+                    for (const auto& b : recent)
+                        if (const double bt = mrpt::Clock::toDouble(b->timestamp);
+                            bt > mcapRaysUntil && bt <= t)
+                            rays.push_back(
+                                mcap_output::rayOf(recordFromObservation(*b), m, &txMap));
+                    mcapRaysUntil = t;
+                    if (!rays.empty()) mcapOut->bearingRays(t, rays);
+                }
                 return true;
             };
             std::string stopReason = "Ctrl+C";
@@ -1171,6 +1197,12 @@ int main(int argc, char** argv)
             {
                 mapper.update();
                 liveDevices = nameDevices();
+            }
+            if (mcapOut)
+            {
+                if (mapper.enabled() && est.size() > 0)
+                    mcapOut->devices(est.t.back(), mcap_output::devicesOf(liveDevices));
+                mcapOut->close();
             }
             if (view && !argShot.getValue().empty())
             {

@@ -38,6 +38,8 @@
 #include <iostream>
 #include <optional>
 
+#include "McapOutput.h"
+
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::localization;
 
@@ -338,6 +340,8 @@ int main(int argc, char** argv)
                 false, 1, "N", cmd);
             TCLAP::SwitchArg argQuiet("q", "quiet", "No progress display", cmd);
             TCLAP::SwitchArg argNoPlots("", "no-plots", "Don't draw PNGs", cmd);
+            TCLAP::ValueArg<std::string> argMcap(
+                "", "mcap", mcap_output::optionHelp(), false, "", "OUT.mcap", cmd);
 
             cli::JoinedArgv args(argc, argv, "--sensor-pose", 6);
             if (const int rc = cli::parseCommandLine(cmd, args.argc(), args.argv()); rc >= 0)
@@ -588,6 +592,10 @@ int main(int argc, char** argv)
                 smootherOptions.enabled
                     ? "wifi-pf-localization estimate (PF mean refined by the window smoother)"
                     : "wifi-pf-localization estimate (PF mean)");
+            // MRPT's loop keeps no particle spread: poses without covariance.
+            if (argMcap.isSet() && est.size() > 0)
+                mcap_output::writeTrajectory(
+                    argMcap.getValue(), est, nullptr, usable, &txs, nullptr);
 
             std::ostringstream sum;
             sum << "wifi-pf-localization summary\n"

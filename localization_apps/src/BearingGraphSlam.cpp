@@ -11,11 +11,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <optional>
 #include <set>
+#include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "BearingResiduals.h"
 
@@ -44,6 +48,82 @@ struct UnionFind
     size_t find(size_t x) { return p[x] == x ? x : p[x] = find(p[x]); }
     void unite(size_t a, size_t b) { p[find(a)] = find(b); }
 };
+
+/** Where the time of one solveBearingGraph call goes (GraphSlamResult::phases) and its progress
+ *  lines (GraphSlamOptions::progress), each with the time elapsed since the call started. */
+class PhaseLog
+{
+public:
+    explicit PhaseLog(const GraphSlamOptions& o)
+        : progress_(o.progress), phaseFinished_(o.phaseFinished)
+    {
+    }
+
+    void add(const std::string& name, double seconds)
+    {
+        if (phaseFinished_) phaseFinished_(GraphSlamPhase{name, seconds, 1});
+        auto it = std::find_if(
+            phases.begin(), phases.end(), [&](const GraphSlamPhase& p) { return p.name == name; });
+        if (it == phases.end()) it = phases.insert(phases.end(), GraphSlamPhase{name, 0, 0});
+        it->seconds += seconds;
+        it->runs++;
+    }
+    void say(const std::string& line)
+    {
+        lastSaid_ = clock_.Tac();
+        if (!progress_) return;
+        std::ostringstream s;
+        s << "[" << std::fixed << std::setprecision(1) << lastSaid_ << " s] " << line;
+        progress_(s.str());
+    }
+    double elapsed() const { return clock_.Tac(); }
+    double sinceLastLine() const { return clock_.Tac() - lastSaid_; }
+    void copyTo(GraphSlamResult& r) const
+    {
+        r.phases = phases;
+        r.apTriangulations = triangulations;
+    }
+
+    std::vector<GraphSlamPhase> phases;
+    size_t triangulations = 0;
+
+private:
+    std::function<void(const std::string&)> progress_;
+    std::function<void(const GraphSlamPhase&)> phaseFinished_;
+    mrpt::system::CTicTac clock_;
+    double lastSaid_ = 0;
+};
+
+/** Times one phase from construction to stop() (or destruction). */
+class PhaseTimer
+{
+public:
+    PhaseTimer(PhaseLog& log, std::string name) : log_(log), name_(std::move(name)) {}
+    ~PhaseTimer() { stop(); }
+    PhaseTimer(const PhaseTimer&) = delete;
+    PhaseTimer& operator=(const PhaseTimer&) = delete;
+    double stop()
+    {
+        if (!running_) return 0;
+        running_ = false;
+        const double s = tic_.Tac();
+        log_.add(name_, s);
+        return s;
+    }
+
+private:
+    PhaseLog& log_;
+    std::string name_;
+    mrpt::system::CTicTac tic_;
+    bool running_ = true;
+};
+
+std::string secondsText(double s)
+{
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(s < 10 ? 2 : 1) << s << " s";
+    return o.str();
+}
 }  // namespace
 
 TPose2D placeTrajectory(
@@ -58,7 +138,13 @@ std::vector<TPose2D> placeTrajectoryCandidates(
     double window_s, size_t maxCandidates)
 {
     if (odo.empty()) throw std::runtime_error("placeTrajectory: empty odometry");
-    std::vector<std::pair<const BearingRecord*, TPose2D>> sample;
+    struct Sample
+    {
+        const BearingRecord* b;
+        TPose2D pose;  // odometry frame
+        const KnownTransmitter* ap;
+    };
+    std::vector<Sample> sample;
     std::vector<const BearingRecord*> cand;
     for (const auto& b : bearings)
         if (b.t <= odo.t.front() + window_s && aps.find(b.transmitter)) cand.push_back(&b);
@@ -66,7 +152,8 @@ std::vector<TPose2D> placeTrajectoryCandidates(
     for (size_t i = 0; i < cand.size(); i += stride)
     {
         TPose2D p;
-        if (odo.interpolate(cand[i]->t, p)) sample.emplace_back(cand[i], p);
+        if (odo.interpolate(cand[i]->t, p))
+            sample.push_back({cand[i], p, aps.find(cand[i]->transmitter)});
     }
     if (sample.size() < 5)
         throw std::runtime_error(
@@ -76,13 +163,16 @@ std::vector<TPose2D> placeTrajectoryCandidates(
     RobustBearingModel model;
     model.minStd_rad = 0.087;  // coarse grid: be tolerant
     const BearingUse use;
-    auto score = [&](const TPose2D& T)
+    // The score of a placement over every `every`-th sample.
+    auto scoreWith = [&](const TPose2D& T, const RobustBearingModel& m, size_t every)
     {
         double ll = 0;
-        for (const auto& [b, p] : sample)
-            ll += recordLogLikelihood(*b, compose(T, p), *aps.find(b->transmitter), model, use);
+        for (size_t i = 0; i < sample.size(); i += every)
+            ll += recordLogLikelihood(
+                *sample[i].b, compose(T, sample[i].pose), *sample[i].ap, m, use);
         return ll;
     };
+    auto score = [&](const TPose2D& T) { return scoreWith(T, model, 1); };
     double xmin, xmax, ymin, ymax;
     aps.bounds(0, xmin, xmax, ymin, ymax);
     // The trajectory starts somewhere among the APs: place its first pose there.
@@ -98,16 +188,61 @@ std::vector<TPose2D> placeTrajectoryCandidates(
     {
         double score, x, y, yaw;
     };
+    const auto byScore = [](const Cell& a, const Cell& b) { return a.score > b.score; };
+    // The global grid: 0.5 m and 5°, as long as that is at most kGridCells positions (a room);
+    // over a larger area (a building) first a coarser grid with every third sample and σ
+    // widened by its cells (a cell holds points up to 0.7 step from its centre), whose best
+    // kCoarseModes cells are then searched at 0.5 m: the cost stays that of a room.
+    constexpr double kFineStep = 0.5, kGridCells = 2500;
+    constexpr size_t kCoarseModes = 12;
+    const double area = std::max(xmax - xmin, kFineStep) * std::max(ymax - ymin, kFineStep);
+    const double coarseStep = std::max(kFineStep, std::sqrt(area / kGridCells));
     std::vector<Cell> grid;
-    for (double x = xmin; x <= xmax + 1e-9; x += 0.5)
-        for (double y = ymin; y <= ymax + 1e-9; y += 0.5)
-            for (int k = 0; k < 72; ++k)
-            {
-                const double yaw = -M_PI + k * (M_PI / 36);
-                grid.push_back({score(transformFor(x, y, yaw)), x, y, yaw});
-            }
-    std::sort(
-        grid.begin(), grid.end(), [](const Cell& a, const Cell& b) { return a.score > b.score; });
+    if (coarseStep <= kFineStep)
+    {
+        for (double x = xmin; x <= xmax + 1e-9; x += kFineStep)
+            for (double y = ymin; y <= ymax + 1e-9; y += kFineStep)
+                for (int k = 0; k < 72; ++k)
+                {
+                    const double yaw = -M_PI + k * (M_PI / 36);
+                    grid.push_back({score(transformFor(x, y, yaw)), x, y, yaw});
+                }
+    }
+    else
+    {
+        RobustBearingModel coarse = model;
+        coarse.minStd_rad = model.minStd_rad * coarseStep / kFineStep;
+        std::vector<Cell> cells;
+        for (double x = xmin; x <= xmax + 1e-9; x += coarseStep)
+            for (double y = ymin; y <= ymax + 1e-9; y += coarseStep)
+                for (int k = 0; k < 72; ++k)
+                {
+                    const double yaw = -M_PI + k * (M_PI / 36);
+                    cells.push_back({scoreWith(transformFor(x, y, yaw), coarse, 3), x, y, yaw});
+                }
+        std::sort(cells.begin(), cells.end(), byScore);
+        std::vector<Cell> coarseModes;
+        for (const auto& c : cells)
+        {
+            if (coarseModes.size() >= kCoarseModes) break;
+            bool near = false;
+            for (const auto& m : coarseModes)
+                near |= std::hypot(c.x - m.x, c.y - m.y) < 1.5 * coarseStep &&
+                        std::abs(wrapToPi(c.yaw - m.yaw)) < M_PI / 4;
+            if (!near) coarseModes.push_back(c);
+        }
+        const int n = int(std::ceil(0.5 * coarseStep / kFineStep));
+        for (const auto& m : coarseModes)
+            for (int i = -n; i <= n; ++i)
+                for (int j = -n; j <= n; ++j)
+                    for (int k = -1; k <= 1; ++k)
+                    {
+                        const double x = m.x + i * kFineStep, y = m.y + j * kFineStep;
+                        const double yaw = wrapToPi(m.yaw + k * (M_PI / 36));
+                        grid.push_back({score(transformFor(x, y, yaw)), x, y, yaw});
+                    }
+    }
+    std::sort(grid.begin(), grid.end(), byScore);
     // Distinct modes, best first: a cell joins only if no better one is within 1.5 m and 45°.
     std::vector<Cell> modes;
     for (const auto& c : grid)
@@ -144,14 +279,36 @@ std::vector<TPose2D> placeTrajectoryCandidates(
 
 namespace
 {
+/** How one solve fits into the whole run: its progress line, and for the stages of the grown
+ *  start the poses held where the previous stage left them and the APs carried over from it. */
+struct SolveContext
+{
+    PhaseLog& log;
+    std::string label;  //!< progress line after the solve; empty: none (grown stages)
+    /** Nodes before this time stay at their initial poses (a grown stage solves its newest
+     *  windows; the older ones were solved before): their odometry edges are left out, and so
+     *  are their bearings of known APs. */
+    double freeFrom = -std::numeric_limits<double>::infinity();
+    /** Unknown APs solved by the previous stage: their start, unless their bearings have
+     *  doubled since they were last triangulated (triangulatedWith). */
+    const TransmitterMap* carriedAps = nullptr;
+    std::map<MacAddress, size_t>* triangulatedWith = nullptr;
+    int maxIterations = 0;  //!< > 0: instead of GraphSlamOptions::maxIterations
+    /** The whole problem from a grown start: thousands of poses each a little off move the
+     *  cost by less than Ceres' default relative tolerance (1e-6) per iteration while the
+     *  trajectory still improves (a 15-minute drive: p90 0.065 -> 0.057 m): go on to 1e-10. */
+    bool finalOfGrown = false;
+};
+
 /** One solve. The nodes start at `initialWorld` (interpolated at the node times) if given, else
  *  at the odometry composed with `place`; unknown APs are triangulated on those poses. */
 GraphSlamResult solveOnce(
     const GraphSlamInput& in, const GraphSlamOptions& opt, const TPose2D& place,
-    const Trajectory2D* initialWorld)
+    const Trajectory2D* initialWorld, SolveContext ctx)
 {
     mrpt::system::CTicTac total;
     GraphSlamResult res;
+    PhaseTimer attachTimer(ctx.log, "attach bearings to nodes");
     const Trajectory2D& odo = in.odometry;
     if (odo.size() < 2) throw std::runtime_error("graph SLAM: the odometry has < 2 poses");
 
@@ -227,6 +384,7 @@ GraphSlamResult solveOnce(
             "graph SLAM: no usable bearings (" + res.warnings.summary() +
             "); do the bearings' timestamps overlap the odometry?");
 
+    attachTimer.stop();
     // ---- Initial values.
     std::vector<std::array<double, 3>> X(N);
     for (size_t k = 0; k < N; ++k)
@@ -240,6 +398,7 @@ GraphSlamResult solveOnce(
     }
     if (!opt.apsKnown)
     {
+        PhaseTimer initTimer(ctx.log, "unknown-AP initialisation");
         // Unknown APs: triangulate each from its AoA rays on the odometry trajectory, then its
         // yaw from AoD by voting over both mirror candidates.
         std::map<MacAddress, std::vector<BearingRay>> rays;
@@ -260,7 +419,6 @@ GraphSlamResult solveOnce(
         dmo.gridStep_m = 0.25;
         for (const auto& [mac, count] : unknownSeen)
         {
-            (void)count;
             KnownTransmitter t;
             t.mac = mac;
             const KnownTransmitter* k = in.aps.find(mac);
@@ -272,7 +430,23 @@ GraphSlamResult solveOnce(
                 res.warnings.noAngle++;
                 continue;  // AoD only: can't place it
             }
+            // The previous stage's solution of this AP is a better start than rays from a
+            // trajectory continued by odometry, until its bearings have doubled.
+            const KnownTransmitter* carried = ctx.carriedAps ? ctx.carriedAps->find(mac) : nullptr;
+            if (carried && ctx.triangulatedWith)
+            {
+                const auto last = ctx.triangulatedWith->find(mac);
+                if (last != ctx.triangulatedWith->end() && count < 2 * last->second)
+                {
+                    t.pose = carried->pose;
+                    apIndex[mac] = apList.size();
+                    apList.push_back(t);
+                    continue;
+                }
+            }
             const auto d = triangulateDevice(r->second, dmo);
+            ctx.log.triangulations++;
+            if (ctx.triangulatedWith) (*ctx.triangulatedWith)[mac] = count;
             if (!d.localized) continue;
             t.pose = TPose2D(d.x, d.y, 0);
             // Yaw: histogram of (direction to robot − AoD) over both candidates.
@@ -303,12 +477,17 @@ GraphSlamResult solveOnce(
     std::vector<std::array<double, 3>> A(apList.size());
     for (size_t j = 0; j < apList.size(); ++j)
         A[j] = {apList[j].pose.x, apList[j].pose.y, apList[j].pose.phi};
+    PhaseTimer buildTimer(ctx.log, "graph construction");
 
     // ---- The problem.
     ceres::Problem::Options po;
     po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
     ceres::Problem problem(po);
+    // Nodes before ctx.freeFrom are held (a grown stage's older windows).
+    const size_t firstFree =
+        size_t(std::lower_bound(nodes.t.begin(), nodes.t.end(), ctx.freeFrom) - nodes.t.begin());
     for (auto& x : X) problem.AddParameterBlock(x.data(), 3);
+    for (size_t k = 0; k < firstFree && k < N; ++k) problem.SetParameterBlockConstant(X[k].data());
     for (auto& a : A) problem.AddParameterBlock(a.data(), 3);
 
     // The odometry's scale and heading drift per metre: estimated with their priors, or held at
@@ -326,6 +505,7 @@ GraphSlamResult solveOnce(
         problem.SetParameterBlockConstant(odoBias.data());
 
     UnionFind uf(N);
+    for (size_t k = 1; k < firstFree && k < N; ++k) uf.unite(k, 0);
     auto addOdo = [&](size_t i, size_t j, const TPose2D& z, const Eigen::Matrix3d& info)
     {
         Eigen::LLT<Eigen::Matrix3d> llt(info);
@@ -358,7 +538,7 @@ GraphSlamResult solveOnce(
     }
     else
     {
-        for (size_t k = 0; k + 1 < N; ++k)
+        for (size_t k = firstFree > 0 ? firstFree - 1 : 0; k + 1 < N; ++k)
         {
             const TPose2D z = inverseCompose(nodes.poses[k], nodes.poses[k + 1]);
             const double d = std::hypot(z.x, z.y);
@@ -396,6 +576,7 @@ GraphSlamResult solveOnce(
     {
         const auto it = apIndex.find(a.b->transmitter);
         if (it == apIndex.end()) continue;  // an unknown AP that couldn't be initialised
+        if (opt.apsKnown && a.node < firstFree) continue;  // pose and AP both held
         double* ap = A[it->second].data();
         if (opt.useAoa && a.b->hasAoa)
         {
@@ -439,23 +620,36 @@ GraphSlamResult solveOnce(
 
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-    so.max_num_iterations = opt.maxIterations;
+    so.max_num_iterations = ctx.maxIterations > 0 ? ctx.maxIterations : opt.maxIterations;
     so.num_threads = opt.threads;
     so.minimizer_progress_to_stdout = opt.verbose;
+    if (ctx.finalOfGrown) so.function_tolerance = 1e-10;
     ceres::Solver::Summary sum;
-    mrpt::system::CTicTac tic;
+    buildTimer.stop();
+    PhaseTimer solveTimer(ctx.log, "Ceres solve");
     ceres::Solve(so, &problem, &sum);
-    res.solveTime_s = tic.Tac();
+    res.solveTime_s = solveTimer.stop();
     res.initialCost = sum.initial_cost, res.finalCost = sum.final_cost;
     res.iterations = int(sum.iterations.size());
     res.converged = sum.termination_type == ceres::CONVERGENCE;
     res.solverReport = sum.BriefReport();
     res.odometryScale = odoBias[0], res.odometryYawDrift_radPerM = odoBias[1];
     if (!sum.IsSolutionUsable()) throw std::runtime_error("Ceres failed: " + sum.BriefReport());
+    if (!ctx.label.empty())
+    {
+        std::ostringstream line;
+        line << "solved " << ctx.label << ": " << N << " poses, " << A.size() << " APs, "
+             << res.aoaEdges + res.aodEdges << " bearing edges, " << res.iterations
+             << " iterations, cost " << std::setprecision(4) << res.initialCost << " -> "
+             << res.finalCost << " in " << secondsText(res.solveTime_s)
+             << (res.converged ? "" : " (not converged)");
+        ctx.log.say(line.str());
+    }
 
     // ---- How far the bearings are from the solution: biased bearings (e.g. a receiver
     //      calibration of another boot) stay tens of degrees off whatever the start.
     {
+        PhaseTimer residualTimer(ctx.log, "residual statistics");
         std::vector<double> w, deg;
         w.reserve(bearingBlocks.size()), deg.reserve(bearingBlocks.size());
         size_t within = 0;
@@ -479,6 +673,7 @@ GraphSlamResult solveOnce(
     res.apCov.assign(A.size(), {0, 0, 0});
     if (opt.apCovariance && !opt.apsKnown)
     {
+        PhaseTimer covarianceTimer(ctx.log, "AP covariance");
         ceres::Covariance::Options co;
         co.algorithm_type = ceres::SPARSE_QR;
         co.num_threads = opt.threads;
@@ -554,56 +749,143 @@ Trajectory2D continueWithOdometry(const Trajectory2D& solved, const Trajectory2D
     return out;
 }
 
-/** Unknown APs, grown start: solve the first window, then append one window after another, each
- *  starting from the previous solution continued by the odometry (see growthWindow_s). The
- *  last stage is the whole problem. */
-GraphSlamResult solveGrown(const GraphSlamInput& in, const GraphSlamOptions& opt, size_t& stages)
+/** The grown start: solve the first window, then append one window after another, each
+ *  starting from the previous solution continued by the odometry (see growthWindow_s); the
+ *  last stage is the whole problem. A stage frees only the poses of its newest
+ *  kFreeWindows windows (the older ones stay as solved) and, for unknown APs, keeps of the
+ *  older bearings one per AP and cell of growthThinning_m (on the solved poses), which hold the
+ *  APs; it starts the APs from the previous stage's solution (re-triangulated when their
+ *  bearings have doubled). So a stage costs what two windows and the area hold, and the stages
+ *  together grow linearly with the drive. Known APs: the first window is solved from each of
+ *  `placements` and the lowest cost goes on (`chosen`: its index). */
+GraphSlamResult solveGrown(
+    const GraphSlamInput& in, const GraphSlamOptions& opt, const std::vector<TPose2D>& placements,
+    size_t& stages, size_t& chosen, PhaseLog& log)
 {
+    constexpr double kFreeWindows = 4;
     const Trajectory2D& odo = in.odometry;
-    const double W = opt.growthWindow_s, tEnd = odo.t.back();
+    const double W = opt.growthWindow_s, t0 = odo.t.front(), tEnd = odo.t.back();
+    const size_t windows = size_t(std::max(1.0, std::round((tEnd - t0) / W)));
     GraphSlamOptions stageOpt = opt;
     stageOpt.apCovariance = false;  // only the last stage's covariance is wanted
     Trajectory2D solved;
+    TransmitterMap solvedAps;
+    std::map<MacAddress, size_t> triangulatedWith;
     stages = 0;
-    for (double T = odo.t.front() + W;; T += W)
+    chosen = 0;
+    TPose2D place = placements.empty() ? TPose2D(0, 0, 0) : placements.front();
+    // The stage's input grows with T: odometry appended; bearings = the thinned history of the
+    // held poses + every bearing of the free windows.
+    GraphSlamInput window;
+    window.aps = in.aps;
+    std::vector<BearingRecord> history, recent;
+    std::set<std::tuple<MacAddress, long, long>> historyCells;
+    size_t nextOdo = 0, nextBearing = 0;
+    std::vector<size_t> byTime(in.bearings.size());
+    std::iota(byTime.begin(), byTime.end(), 0);
+    std::stable_sort(
+        byTime.begin(), byTime.end(),
+        [&](size_t a, size_t b) { return in.bearings[a].t < in.bearings[b].t; });
+    for (double T = t0 + W;; T += W)
     {
         const bool last = T >= tEnd - 0.5 * W;  // a short tail joins the last stage
         const Trajectory2D init =
             solved.empty() ? Trajectory2D() : continueWithOdometry(solved, odo);
         const Trajectory2D* start = solved.empty() ? nullptr : &init;
         ++stages;
-        if (last) return solveOnce(in, opt, TPose2D(0, 0, 0), start);
-        GraphSlamInput window;
-        window.aps = in.aps;
-        for (size_t i = 0; i < odo.size() && odo.t[i] <= T; ++i)
-            window.odometry.push_back(odo.t[i], odo.poses[i]);
-        for (const auto& b : in.bearings)
-            if (b.t <= T) window.bearings.push_back(b);
+        SolveContext ctx{
+            log,
+            last ? "grown start (last of " + std::to_string(stages) + " windows)" : std::string()};
+        ctx.carriedAps = solvedAps.empty() ? nullptr : &solvedAps;
+        ctx.triangulatedWith = &triangulatedWith;
+        ctx.finalOfGrown = last;
+        if (last) return solveOnce(in, opt, place, start, ctx);
+
+        PhaseTimer inputTimer(log, "grown-stage input");
+        ctx.freeFrom = T - kFreeWindows * W;
+        for (; nextOdo < odo.size() && odo.t[nextOdo] <= T; ++nextOdo)
+            window.odometry.push_back(odo.t[nextOdo], odo.poses[nextOdo]);
+        for (; nextBearing < byTime.size() && in.bearings[byTime[nextBearing]].t <= T;
+             ++nextBearing)
+            recent.push_back(in.bearings[byTime[nextBearing]]);
+        // Bearings whose poses are held from now on: known APs need none of them; unknown ones
+        // keep one per AP and cell, placed on the solved poses.
+        size_t moved = 0;
+        for (; moved < recent.size() && recent[moved].t < ctx.freeFrom; ++moved)
+        {
+            const auto& b = recent[moved];
+            TPose2D robot;
+            if (opt.apsKnown || opt.growthThinning_m <= 0 ||
+                !(solved.empty() ? odo : solved).interpolate(b.t, robot))
+                continue;
+            if (solved.empty()) robot = compose(place, robot);
+            const auto s = compose(robot, b.sensorPose);
+            const auto [cx, cy] = decorrelationCell(s.x, s.y, opt.growthThinning_m);
+            if (historyCells.emplace(b.transmitter, cx, cy).second) history.push_back(b);
+        }
+        recent.erase(recent.begin(), recent.begin() + long(moved));
+        window.bearings = history;
+        window.bearings.insert(window.bearings.end(), recent.begin(), recent.end());
+        inputTimer.stop();
         try
         {
-            solved = solveOnce(window, stageOpt, TPose2D(0, 0, 0), start).poses;
+            GraphSlamResult r;
+            if (solved.empty() && placements.size() > 1)
+            {
+                // Known APs: the placement whose first window fits best goes on.
+                bool have = false;
+                for (size_t i = 0; i < placements.size(); ++i)
+                {
+                    try
+                    {
+                        auto c = solveOnce(window, stageOpt, placements[i], nullptr, ctx);
+                        if (!have || c.finalCost < r.finalCost)
+                            r = std::move(c), have = true, chosen = i, place = placements[i];
+                    }
+                    catch (const std::runtime_error&)
+                    {
+                        // Not placeable this way: the others compete.
+                    }
+                }
+                if (!have) throw std::runtime_error("no placement solvable");
+            }
+            else
+                r = solveOnce(window, stageOpt, place, start, ctx);
+            solved = std::move(r.poses);
+            solvedAps = std::move(r.aps);
         }
         catch (const std::runtime_error&)
         {
             // Nothing to solve yet in this window (no bearings, no AP placeable): go on with the
             // odometry as it is.
         }
+        if (log.sinceLastLine() >= 5)
+        {
+            std::ostringstream line;
+            line << "grown start: window " << stages << " of about " << windows << " ("
+                 << int(T - t0) << " s of " << int(tEnd - t0) << " s), " << window.bearings.size()
+                 << " bearings in the stage";
+            log.say(line.str());
+        }
     }
 }
 
 /** Unknown APs: the start from all rays on the odometry and the grown start; lowest cost wins. */
-GraphSlamResult solveUnknownAps(const GraphSlamInput& in, const GraphSlamOptions& opt)
+GraphSlamResult solveUnknownAps(
+    const GraphSlamInput& in, const GraphSlamOptions& opt, PhaseLog& log)
 {
     mrpt::system::CTicTac total;
-    GraphSlamResult best = solveOnce(in, opt, TPose2D(0, 0, 0), nullptr);
-    best.placement = "APs triangulated on the odometry";
-    best.hypotheses = 1;
     const bool canGrow = !in.graph && opt.growthWindow_s > 0 && in.odometry.size() >= 2 &&
                          in.odometry.t.back() - in.odometry.t.front() > 1.5 * opt.growthWindow_s;
+    SolveContext odometryStart{log, "odometry start (APs triangulated)"};
+    if (canGrow) odometryStart.maxIterations = std::max(1, opt.odometryStartIterations);
+    GraphSlamResult best = solveOnce(in, opt, TPose2D(0, 0, 0), nullptr, odometryStart);
+    best.placement = "APs triangulated on the odometry";
+    best.hypotheses = 1;
     if (canGrow)
     {
-        size_t stages = 0;
-        auto grown = solveGrown(in, opt, stages);
+        size_t stages = 0, chosen = 0;
+        auto grown = solveGrown(in, opt, {}, stages, chosen, log);
         best.hypotheses = 2;
         if (grown.finalCost < best.finalCost)
         {
@@ -627,14 +909,20 @@ TPose2D alignPoints(const Eigen::Matrix2Xd& a, const Eigen::Matrix2Xd& b)
 
 GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptions& opt)
 {
-    if (!opt.apsKnown) return solveUnknownAps(in, opt);
+    PhaseLog log(opt);
+    if (!opt.apsKnown)
+    {
+        auto r = solveUnknownAps(in, opt, log);
+        log.copyTo(r);
+        return r;
+    }
     if (in.aps.empty()) throw std::runtime_error("graph SLAM: known APs requested, none given");
     if (in.odometry.size() < 2) throw std::runtime_error("graph SLAM: the odometry has < 2 poses");
 
     // Several starts, each optimised; the lowest final cost (the same problem for all) wins:
     // (1) the best distinct placements of the odometry among the APs over the first seconds;
-    // (2) the estimated-AP solution (which needs no placement) moved onto the map by the rigid
-    //     transform that best aligns its APs with the known ones.
+    // (2) when those can't be trusted, the estimated-AP solution (which needs no placement)
+    //     moved onto the map by the rigid transform that best aligns its APs with the known ones.
     mrpt::system::CTicTac total;
     Trajectory2D placed = in.odometry;  // what is placed: odometry, or the .graph's node poses
     if (in.graph && in.graph->nodes.size() == in.odometry.size())
@@ -656,65 +944,112 @@ GraphSlamResult solveBearingGraph(const GraphSlamInput& in, const GraphSlamOptio
             best.placement = how;
         }
     };
+    auto finish = [&]()
+    {
+        best.hypotheses = tried;
+        best.totalTime_s = total.Tac();
+        log.copyTo(best);
+        return best;
+    };
     if (!in.placements.empty())
     {
         for (size_t i = 0; i < in.placements.size(); ++i)
-            consider(
-                solveOnce(in, opt, in.placements[i], nullptr),
-                "given placement " + std::to_string(i + 1));
-        best.hypotheses = tried;
-        best.totalTime_s = total.Tac();
-        return best;
+        {
+            const std::string how = "given placement " + std::to_string(i + 1);
+            consider(solveOnce(in, opt, in.placements[i], nullptr, {log, how}), how);
+        }
+        return finish();
     }
-    const auto places = placeTrajectoryCandidates(
-        placed, in.bearings, in.aps, 30, size_t(std::max(1, opt.placementHypotheses)));
-    for (size_t i = 0; i < places.size(); ++i)
-        consider(
-            solveOnce(in, opt, places[i], nullptr),
-            "placement " + std::to_string(i + 1) + " of the first 30 s");
-    if (opt.alignEstimatedAps)
+    constexpr double placementWindow_s = 30;
+    std::vector<TPose2D> places;
     {
-        GraphSlamOptions eo = opt;
-        eo.apsKnown = false;
-        GraphSlamInput ei = in;  // names and arrays only are used
-        std::optional<GraphSlamResult> est;
-        try
+        PhaseTimer timer(log, "placement search");
+        places = placeTrajectoryCandidates(
+            placed, in.bearings, in.aps, placementWindow_s,
+            size_t(std::max(1, opt.placementHypotheses)));
+        log.say(
+            "placement search: " + std::to_string(places.size()) + " candidates over the first " +
+            std::to_string(int(placementWindow_s)) + " s in " + secondsText(timer.stop()));
+    }
+    // A long drive placed as a whole drifts far from the map (0.4 deg/m turns a 1.4 km drive by
+    // more than a turn): each placement's full solve would start far from the solution and cost
+    // hundreds of iterations. The grown start instead solves window by window from the
+    // placement that fits the first window best.
+    const bool canGrow = !in.graph && opt.growthWindow_s > 0 &&
+                         in.odometry.t.back() - in.odometry.t.front() > 1.5 * opt.growthWindow_s;
+    if (canGrow)
+    {
+        size_t stages = 0, chosen = 0;
+        auto r = solveGrown(in, opt, places, stages, chosen, log);
+        consider(
+            std::move(r), "placement " + std::to_string(chosen + 1) +
+                              " of the first 30 s, grown window by window (" +
+                              std::to_string(stages) + " windows of " +
+                              std::to_string(int(std::round(opt.growthWindow_s))) + " s)");
+    }
+    else
+        for (size_t i = 0; i < places.size(); ++i)
         {
-            est = solveUnknownAps(ei, eo);
+            const std::string how = "placement " + std::to_string(i + 1) + " of the first 30 s";
+            consider(solveOnce(in, opt, places[i], nullptr, {log, how}), how);
         }
-        catch (const std::runtime_error&)
+    if (!opt.alignEstimatedAps) return finish();
+
+    // Is the placement clear? Bearings of fewer than 3 APs at the start leave it ambiguous (one
+    // AP fixes no heading, two leave a mirror), and a solution that leaves many bearings
+    // unexplained or did not converge started in a wrong mode.
+    std::set<MacAddress> heardAtStart;
+    for (const auto& b : in.bearings)
+        if (b.t <= placed.t.front() + placementWindow_s && in.aps.find(b.transmitter))
+            heardAtStart.insert(b.transmitter);
+    std::string doubt;
+    if (heardAtStart.size() < 3)
+        doubt = "the first 30 s hear " + std::to_string(heardAtStart.size()) + " of the APs";
+    else if (best.bearingsWithin3Sigma < opt.placementInlierShare)
+        doubt = "the best placement explains only " +
+                std::to_string(int(std::round(100 * best.bearingsWithin3Sigma))) +
+                " % of the bearings";
+    else if (!best.converged)
+        doubt = "the best placement did not converge";
+    if (doubt.empty()) return finish();
+
+    log.say("placement unclear (" + doubt + "): also starting from the estimated-AP solution");
+    GraphSlamOptions eo = opt;
+    eo.apsKnown = false;
+    std::optional<GraphSlamResult> est;
+    try
+    {
+        est = solveUnknownAps(in, eo, log);  // names and arrays of in.aps only are used
+    }
+    catch (const std::runtime_error&)
+    {
+        // Not enough for the estimated-AP solution: the placements above stand.
+    }
+    if (est)
+    {
+        std::vector<std::pair<TPose2D, TPose2D>> pairs;
+        for (const auto& t : est->aps.transmitters())
+            if (const auto* k = in.aps.find(t.mac)) pairs.emplace_back(t.pose, k->pose);
+        if (pairs.size() >= 2)
         {
-            // Not enough for the estimated-AP solution: the placements above stand.
-        }
-        if (est)
-        {
-            std::vector<std::pair<TPose2D, TPose2D>> pairs;
-            for (const auto& t : est->aps.transmitters())
-                if (const auto* k = in.aps.find(t.mac)) pairs.emplace_back(t.pose, k->pose);
-            if (pairs.size() >= 2)
+            Eigen::Matrix2Xd a(2, pairs.size()), b(2, pairs.size());
+            for (size_t i = 0; i < pairs.size(); ++i)
             {
-                Eigen::Matrix2Xd a(2, pairs.size()), b(2, pairs.size());
-                for (size_t i = 0; i < pairs.size(); ++i)
-                {
-                    a.col(long(i)) << pairs[i].first.x, pairs[i].first.y;
-                    b.col(long(i)) << pairs[i].second.x, pairs[i].second.y;
-                }
-                const TPose2D T = alignPoints(a, b);
-                Trajectory2D init;
-                for (size_t k = 0; k < est->poses.size(); ++k)
-                    init.push_back(est->poses.t[k], compose(T, est->poses.poses[k]));
-                // The estimated-AP solve fixes node 0 at the odometry's first pose: T also
-                // places the odometry.
-                const TPose2D place = T;
-                consider(
-                    solveOnce(in, opt, place, &init), "estimated-AP solution aligned to the map (" +
-                                                          std::to_string(pairs.size()) + " APs)");
+                a.col(long(i)) << pairs[i].first.x, pairs[i].first.y;
+                b.col(long(i)) << pairs[i].second.x, pairs[i].second.y;
             }
+            const TPose2D T = alignPoints(a, b);
+            Trajectory2D init;
+            for (size_t k = 0; k < est->poses.size(); ++k)
+                init.push_back(est->poses.t[k], compose(T, est->poses.poses[k]));
+            // The estimated-AP solve fixes node 0 at the odometry's first pose: T also places
+            // the odometry.
+            const std::string how = "estimated-AP solution aligned to the map (" +
+                                    std::to_string(pairs.size()) + " APs)";
+            consider(solveOnce(in, opt, T, &init, {log, how}), how);
         }
     }
-    best.hypotheses = tried;
-    best.totalTime_s = total.Tac();
-    return best;
+    return finish();
 }
 
 }  // namespace mrpt_wifi::localization

@@ -129,21 +129,80 @@ DeviceEstimate triangulateDevice(const std::vector<BearingRay>& rays, const Devi
 
     // 1) Global search: the mixture log-likelihood over a grid. Robust to outliers and to the
     //    mirror ambiguity (both candidates enter the mixture), no initial guess needed.
+    //    Coarse to fine, so that its cost does not grow with the area: a grid of at most
+    //    kCoarseCells cells per side, then around its best few cells grids 4 times finer down
+    //    to gridStep_m. On a grid of step c a ray at range d can be c/d off the cell's best
+    //    point: its σ grows by that much, so the cell holding the device still scores well.
     const size_t stride = std::max<size_t>(1, rays.size() / o.maxGridRays);
-    double best = -1e300, bx = 0, by = 0;
-    for (double x = xmin; x <= xmax + 1e-9; x += o.gridStep_m)
-        for (double y = ymin; y <= ymax + 1e-9; y += o.gridStep_m)
+    std::vector<const BearingRay*> gridRays;
+    for (size_t i = 0; i < rays.size(); i += stride) gridRays.push_back(&rays[i]);
+    const auto score = [&](double x, double y, double step, size_t every)
+    {
+        const bool blurred = step > o.gridStep_m + 1e-12;
+        double ll = 0;
+        for (size_t i = 0; i < gridRays.size(); i += every)
         {
-            double ll = 0;
-            for (size_t i = 0; i < rays.size(); i += stride)
+            const BearingRay* r = gridRays[i];
+            const double dx = x - r->x, dy = y - r->y;
+            const double pred = wrapToPi(std::atan2(dy, dx) - r->sensorYaw);
+            double sg = o.model.sigma(r->sigma);
+            if (blurred)
             {
-                const auto& r = rays[i];
-                const double pred = wrapToPi(std::atan2(y - r.y, x - r.x) - r.sensorYaw);
-                ll += o.model.logLikelihood(
-                    pred, r.aoa, r.ambiguous, r.mirror, o.model.sigma(r.sigma));
+                const double blur = 0.7 * step / std::max(step, std::hypot(dx, dy));
+                sg = std::sqrt(sg * sg + blur * blur);
             }
-            if (ll > best) best = ll, bx = x, by = y;
+            ll += o.model.logLikelihood(pred, r->aoa, r->ambiguous, r->mirror, sg);
         }
+        return ll;
+    };
+    struct Cell
+    {
+        double ll, x, y;
+    };
+    constexpr double kCoarseCells = 48;
+    constexpr size_t kModes = 4, kCoarseRays = 100;
+    double step = std::max(o.gridStep_m, std::max(xmax - xmin, ymax - ymin) / kCoarseCells);
+    // Blurred as it is, the coarse grid needs fewer rays than the fine ones (only when it is
+    // coarser than gridStep_m: a room keeps its one full grid).
+    const size_t coarseEvery =
+        step > o.gridStep_m + 1e-12 ? std::max<size_t>(1, gridRays.size() / kCoarseRays) : 1;
+    std::vector<Cell> cells;
+    for (double x = xmin; x <= xmax + 1e-9; x += step)
+        for (double y = ymin; y <= ymax + 1e-9; y += step)
+            cells.push_back({score(x, y, step, coarseEvery), x, y});
+    // The best few cells at least two cells apart: each refined on finer grids.
+    const auto bestDistinct = [&](std::vector<Cell>& all, double apart)
+    {
+        std::sort(all.begin(), all.end(), [](const Cell& a, const Cell& b) { return a.ll > b.ll; });
+        std::vector<Cell> modes;
+        for (const auto& c : all)
+        {
+            if (modes.size() >= kModes) break;
+            bool near = false;
+            for (const auto& m : modes) near |= std::hypot(c.x - m.x, c.y - m.y) < apart;
+            if (!near) modes.push_back(c);
+        }
+        return modes;
+    };
+    std::vector<Cell> modes = bestDistinct(cells, 2 * step + 1e-9);
+    while (step > o.gridStep_m + 1e-12)
+    {
+        const double fine = std::max(o.gridStep_m, step / 4);
+        std::vector<Cell> refined;
+        for (const auto& m : modes)
+        {
+            const int n = int(std::ceil(step / fine));
+            for (int i = -n; i <= n; ++i)
+                for (int j = -n; j <= n; ++j)
+                {
+                    const double x = m.x + i * fine, y = m.y + j * fine;
+                    refined.push_back({score(x, y, fine, 1), x, y});
+                }
+        }
+        step = fine;
+        modes = bestDistinct(refined, 2 * step + 1e-9);
+    }
+    const double bx = modes.front().x, by = modes.front().y;
 
     // 2) Refinement with all rays and a robust loss.
     double p[2] = {bx, by};

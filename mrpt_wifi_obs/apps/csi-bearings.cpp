@@ -296,6 +296,40 @@ int main(int argc, char** argv)
                 [&](double f) { progress.update(f, "checking input"); });
             if (csiTotal == 0)
                 throw std::runtime_error("'" + argIn.getValue() + "' holds no CObservationWiFiCSI");
+            // Every channel at once, each with its own calibration: one missing is named with
+            // what to run (an error with --require-calib, else its bearings are uncalibrated).
+            std::string missingChannels;
+            for (const auto& [raw, byCores] : shapes)
+            {
+                const auto cs = Chanspec::decode(raw);
+                if (!cs || calib.empty() || !calib.isFolder()) continue;
+                const std::string& device = processor.preprocessor().rxArray().name;
+                uint64_t frames = 0;
+                bool found = false;
+                for (const auto& [shape, n] : byCores)
+                {
+                    frames += n;
+                    try
+                    {
+                        found |= calib.find(device, *cs, shape.first) != nullptr;
+                    }
+                    catch (const CalibrationError&)
+                    {
+                        found = true;  // present but unfit: checkCompatible names it below
+                    }
+                }
+                if (found) continue;
+                const std::string advice = calib.missingChannelAdvice(device, *cs);
+                if (argRequireCalib.getValue())
+                    missingChannels += "\n  " + std::to_string(frames) + " frames on " +
+                                       cs->asString() + ": " + advice;
+                else
+                    std::cerr << "csi-bearings: warning: " << frames << " frames on "
+                              << cs->asString() << " get uncalibrated bearings: " << advice << "\n";
+            }
+            if (!missingChannels.empty())
+                throw std::runtime_error(
+                    "--require-calib and channels without calibration:" + missingChannels);
             for (const auto& [raw, byCores] : shapes)
             {
                 const auto cs = Chanspec::decode(raw);

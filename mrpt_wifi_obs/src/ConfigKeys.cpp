@@ -121,6 +121,8 @@ std::vector<SectionKeys> makeRegistry()
               "scan_period", "scan_wait", "scanner", "scan_interface", "auto_channel",
               "auto_min_rssi_gain_dB", "auto_min_dwell_s", "auto_min_rssi_dBm", "auto_ssid",
               "auto_mac_filter",
+              // channel hopping
+              "channel_schedule", "channel_dwell_s",
               // bearings computed live
               "bearing_algorithm", "bearing_calibration", "bearing_array", "bearing_options",
               "bearing_tx_arrays", "bearing_queue_length", "bearing_calibration_max_age_days"}))

@@ -517,4 +517,21 @@ std::vector<std::string> CalibrationStore::available(const std::string& device) 
     return out;
 }
 
+std::string CalibrationStore::missingChannelAdvice(
+    const std::string& device, const Chanspec& cs) const
+{
+    std::string have;
+    for (const auto& a : available(device)) have += (have.empty() ? "" : ", ") + a;
+    if (have.empty()) have = "nothing for '" + device + "'";
+    const std::string target = isFolder() ? PhaseCalibration::pathFor(dir_, device, cs)
+                                          : "a folder, e.g. calib/" + device + "/";
+    return "no calibration for " + cs.asString() + " in '" + path_ + "' (it has " + have +
+           "): run wifi-calibrate on a drive among known access points with frames on " +
+           cs.asString() +
+           " (wifi-calibrate DRIVE.rawlog --array ARRAY --transmitters APS.yaml "
+           "--out " +
+           (isFolder() ? path_ : std::string("DIR")) + " writes " + target +
+           ", one file per channel of the drive)";
+}
+
 }  // namespace mrpt_wifi

@@ -11,10 +11,14 @@
 #include <mrpt_wifi/sensor/RosBag.h>
 #endif
 #include <mrpt_wifi/sensor/CsiFileReader.h>
+#include <mrpt_wifi/sensor/McapWriter.h>
+#include <mrpt_wifi/sensor/Ros2Messages.h>
+#include <mrpt_wifi/sensor/Ros2StandardMessages.h>
 
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -72,6 +76,68 @@ void writeJsonLine(std::FILE* f, const CObservationWiFiCSI& o)
     }
     std::fputs("]}\n", f);
 }
+/** What --bag and --mcap export: the CSI frames of IN and, from a rawlog (csi-bearings'
+ *  output), its bearings, in file order. */
+struct ExportedMessages
+{
+    int rc = 0;  //!< 1 after a fault (named on stderr; what came before it was exported)
+    uint64_t csi = 0, bearings = 0;
+    CsiDecodeSummary summary;
+};
+
+ExportedMessages forEachExportedMessage(
+    const std::string& in, const std::string& format, const CsiDecodeOptions& options,
+    bool showProgress, const std::function<void(const CObservationWiFiCSI&)>& onCsi,
+    const std::function<void(const CObservationWiFiBearing&)>& onBearing)
+{
+    ExportedMessages r;
+    const auto counts = [&]
+    { return std::to_string(r.csi) + " CSI, " + std::to_string(r.bearings) + " bearings"; };
+    cli::Progress progress("csi-export", showProgress);
+    const auto onProgress = [&](double f) { progress.update(f, counts()); };
+    try
+    {
+        const auto decoder = format == "auto" ? CsiDecoderRegistry::instance().detect(in)
+                                              : CsiDecoderRegistry::instance().find(format);
+        if (decoder && decoder->name() == "rawlog")
+        {
+            r.summary.format = "rawlog";
+            r.summary.records = forEachRawlogObservation(
+                in,
+                [&](const mrpt::obs::CObservation::Ptr& o)
+                {
+                    if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
+                        onCsi(*c), ++r.csi, ++r.summary.frames;
+                    else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(o))
+                        onBearing(*b), ++r.bearings;
+                },
+                onProgress);
+        }
+        else
+            decodeCsiFile(
+                in, format, options,
+                [&](CObservationWiFiCSI::Ptr&& o)
+                {
+                    onCsi(*o);
+                    ++r.csi;
+                },
+                onProgress, &r.summary);
+        progress.done(counts());
+    }
+    catch (const std::exception& e)
+    {
+        std::cerr << "\ncsi-export: error: " << e.what() << "\n";
+        r.rc = 1;
+    }
+    return r;
+}
+
+/** The rx_id of a frame's messages: --rx-id, else the router's address, else the sensor label. */
+std::string receiverId(const CObservationWiFiCSI& o, const std::string& rxId)
+{
+    return !rxId.empty() ? rxId : !o.routerAddress.empty() ? o.routerAddress : o.sensorLabel;
+}
+
 /** --bag: CSI (and a rawlog's bearings) as WiROS's messages. */
 int exportBag(
     const std::string& in, const std::string& format, const CsiDecodeOptions& options,
@@ -79,63 +145,26 @@ int exportBag(
 {
 #if MRPT_WIFI_HAVE_ROSBAG
     ros1::BagWriter bag(out);
-    uint64_t csi = 0, bearings = 0;
-    const auto writeCsi = [&](const CObservationWiFiCSI& o)
-    {
-        const std::string id = !rxId.empty()              ? rxId
-                               : !o.routerAddress.empty() ? o.routerAddress
-                                                          : o.sensorLabel;
-        const auto m = ros1::fromObservation(o, id);
-        bag.write("/csi", mrpt::Clock::toDouble(o.timestamp), ros1::wifiType(), ros1::serialize(m));
-        ++csi;
-    };
-    cli::Progress progress("csi-export", showProgress);
-    const auto onProgress = [&](double f) {
-        progress.update(f, std::to_string(csi) + " CSI, " + std::to_string(bearings) + " bearings");
-    };
-    CsiDecodeSummary summary;
-    int rc = 0;
-    try
-    {
-        const auto decoder = format == "auto" ? CsiDecoderRegistry::instance().detect(in)
-                                              : CsiDecoderRegistry::instance().find(format);
-        if (decoder && decoder->name() == "rawlog")
+    const auto r = forEachExportedMessage(
+        in, format, options, showProgress,
+        [&](const CObservationWiFiCSI& o)
         {
-            // A rawlog may hold bearings too (csi-bearings' output): both go to the bag.
-            summary.format = "rawlog";
-            summary.records = forEachRawlogObservation(
-                in,
-                [&](const mrpt::obs::CObservation::Ptr& o)
-                {
-                    if (auto c = std::dynamic_pointer_cast<CObservationWiFiCSI>(o))
-                        writeCsi(*c), ++summary.frames;
-                    else if (auto b = std::dynamic_pointer_cast<CObservationWiFiBearing>(o))
-                    {
-                        bag.write(
-                            "/bearing", mrpt::Clock::toDouble(b->timestamp), ros1::bearingType(),
-                            ros1::serialize(ros1::fromBearing(*b)));
-                        ++bearings;
-                    }
-                },
-                onProgress);
-        }
-        else
-            decodeCsiFile(
-                in, format, options, [&](CObservationWiFiCSI::Ptr&& o) { writeCsi(*o); },
-                onProgress, &summary);
-        progress.done(std::to_string(csi) + " CSI, " + std::to_string(bearings) + " bearings");
-    }
-    catch (const std::exception& e)
-    {
-        std::cerr << "\ncsi-export: error: " << e.what() << "\n";
-        rc = 1;
-    }
+            bag.write(
+                "/csi", mrpt::Clock::toDouble(o.timestamp), ros1::wifiType(),
+                ros1::serialize(ros1::fromObservation(o, receiverId(o, rxId))));
+        },
+        [&](const CObservationWiFiBearing& b)
+        {
+            bag.write(
+                "/bearing", mrpt::Clock::toDouble(b.timestamp), ros1::bearingType(),
+                ros1::serialize(ros1::fromBearing(b)));
+        });
     bag.close();
-    std::cerr << summary.asString() << "\n"
-              << "Output: " << out << " (" << csi << " rf_msgs/Wifi on /csi, " << bearings
-              << " rf_msgs/Bearing on /bearing" << (rc ? ", kept valid up to the fault" : "")
+    std::cerr << r.summary.asString() << "\n"
+              << "Output: " << out << " (" << r.csi << " rf_msgs/Wifi on /csi, " << r.bearings
+              << " rf_msgs/Bearing on /bearing" << (r.rc ? ", kept valid up to the fault" : "")
               << ")\n";
-    return conversionExitStatus(rc, summary, "csi-export");
+    return conversionExitStatus(r.rc, r.summary, "csi-export");
 #else
     (void)in, (void)format, (void)options, (void)rxId, (void)showProgress;
     throw std::runtime_error(
@@ -143,6 +172,52 @@ int exportBag(
         ": this build has no ROS 1 bag support (install librosbag-dev: "
         "scripts/install-deps.sh, then rebuild)");
 #endif
+}
+
+/** --mcap: the same as --bag, as a ROS 2 recording (rosbag2's MCAP storage: rf_msgs/msg/Wifi
+ *  on /csi and rf_msgs/msg/Bearing on /bearing, CDR). */
+int exportMcap(
+    const std::string& in, const std::string& format, const CsiDecodeOptions& options,
+    const std::string& out, const std::string& rxId, mcap::Compression compression,
+    bool showProgress)
+{
+    mcap::Writer writer(out, mcap::WriterOptions{compression});
+    const auto& wifi = ros2::wifiType();
+    const auto& bearing = ros2::bearingType();
+    // Channels are added with their first message: a file without bearings has no /bearing.
+    constexpr uint16_t kNoChannel = 0xFFFF;
+    uint16_t csiChannel = kNoChannel, bearingChannel = kNoChannel;
+    const auto stamp = [](mrpt::Clock::time_point t)
+    { return ros2::Time::fromSeconds(mrpt::Clock::toDouble(t)).nanoseconds(); };
+    const auto r = forEachExportedMessage(
+        in, format, options, showProgress,
+        [&](const CObservationWiFiCSI& o)
+        {
+            if (csiChannel == kNoChannel)
+                csiChannel = writer.addRos2Channel("/csi", wifi.name, wifi.definition);
+            writer.write(
+                csiChannel, stamp(o.timestamp),
+                ros2::serializeCdr(ros1::fromObservation(o, receiverId(o, rxId))));
+        },
+        [&](const CObservationWiFiBearing& b)
+        {
+            if (bearingChannel == kNoChannel)
+                bearingChannel =
+                    writer.addRos2Channel("/bearing", bearing.name, bearing.definition);
+            writer.write(
+                bearingChannel, stamp(b.timestamp), ros2::serializeCdr(ros1::fromBearing(b)));
+        });
+    // Closing writes the summary: what was converted before a fault stays readable. A write
+    // error (disk full) throws here, naming the file.
+    writer.close();
+    std::cerr << r.summary.asString() << "\n"
+              << "Output: " << out << " (" << r.csi << " rf_msgs/msg/Wifi on /csi, " << r.bearings
+              << " rf_msgs/msg/Bearing on /bearing"
+              << (writer.failed() ? ", incomplete: writing it failed"
+                  : r.rc          ? ", kept valid up to the fault"
+                                  : "")
+              << ")\n";
+    return conversionExitStatus(r.rc, r.summary, "csi-export");
 }
 }  // namespace
 
@@ -177,9 +252,19 @@ int main(int argc, char** argv)
                 "its CObservationWiFiBearing as rf_msgs/Bearing on /bearing: aoa = [AoA in the "
                 "receive array's frame, rad])",
                 false, "", "OUT.bag", cmd);
+            TCLAP::ValueArg<std::string> argMcap(
+                "", "mcap",
+                "Output ROS 2 recording (MCAP, as rosbag2 writes it; opens in Foxglove): "
+                "rf_msgs/msg/Wifi on /csi and, from a rawlog, rf_msgs/msg/Bearing on /bearing, "
+                "CDR-encoded, the same fields as --bag",
+                false, "", "OUT.mcap", cmd);
+            TCLAP::ValueArg<std::string> argCompression(
+                "", "compression", "With --mcap: chunk compression zstd|lz4|none", false, "zstd",
+                "ALGO", cmd);
             TCLAP::ValueArg<std::string> argRxId(
                 "", "rx-id",
-                "With --bag: rx_id of the messages (default: each frame's router address, else "
+                "With --bag or --mcap: rx_id of the messages (default: each frame's router "
+                "address, else "
                 "its sensor label)",
                 false, "", "ID", cmd);
             TCLAP::ValueArg<std::string> argFormat(
@@ -209,9 +294,16 @@ int main(int argc, char** argv)
             if (argChannel.isSet()) options.chanspec = Chanspec::fromString(argChannel.getValue());
             options.assembler.overwrittenBins = overwrittenBinPolicyFromString(argBins.getValue());
 
-            if (int(argJsonl.isSet()) + int(argStats.isSet()) + int(argBag.isSet()) != 1)
+            if (int(argJsonl.isSet()) + int(argStats.isSet()) + int(argBag.isSet()) +
+                    int(argMcap.isSet()) !=
+                1)
                 throw std::invalid_argument(
-                    "give exactly one of --jsonl OUT, --stats and --bag OUT");
+                    "give exactly one of --jsonl OUT, --stats, --bag OUT and --mcap OUT");
+            const auto compression = mcap::compressionFromString(argCompression.getValue());
+            if (argMcap.isSet())
+                return exportMcap(
+                    argIn.getValue(), format, options, argMcap.getValue(), argRxId.getValue(),
+                    compression, !argQuiet.getValue());
             if (argBag.isSet())
                 return exportBag(
                     argIn.getValue(), format, options, argBag.getValue(), argRxId.getValue(),

@@ -1,8 +1,9 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.
  *
  * csi-import (also built as csi-pcap2rawlog, its first name): converts a CSI capture of any
- * supported source (Nexmon pcap of any chip, Intel 5300 .dat, ESP32 CSI_DATA lines) into an
- * MRPT rawlog of mrpt_wifi::CObservationWiFiCSI, one observation per overheard frame. */
+ * supported source (Nexmon pcap of any chip, Intel 5300 .dat, ESP32 CSI_DATA lines, WiROS's
+ * ROS 1 and ROS 2 bags) into an MRPT rawlog of mrpt_wifi::CObservationWiFiCSI, one observation
+ * per overheard frame. */
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
@@ -33,7 +34,9 @@ int main(int argc, char** argv)
                     formats,
                 ' ', "0.1");
             TCLAP::UnlabeledValueArg<std::string> argIn(
-                "input", "Input capture (.pcap, .pcapng, .dat, .csv/.txt of CSI_DATA lines, .bag)",
+                "input",
+                "Input capture (.pcap, .pcapng, .dat, .csv/.txt of CSI_DATA lines, ROS 1 .bag, "
+                "ROS 2 .mcap / .db3 or a ROS 2 bag directory)",
                 true, "", "IN", cmd);
             TCLAP::UnlabeledValueArg<std::string> argOut(
                 "output", "Output rawlog", true, "", "OUT.rawlog", cmd);

@@ -2,6 +2,8 @@
 #include <mrpt/core/format.h>
 #include <mrpt_wifi/sensor/AccessPointSelector.h>
 
+#include <algorithm>
+
 namespace mrpt_wifi
 {
 std::optional<AccessPointSelector::Decision> AccessPointSelector::onScan(
@@ -60,6 +62,29 @@ std::optional<AccessPointSelector::Decision> AccessPointSelector::onScan(
             best->bssid.asString().c_str(), best->ssid.c_str(), best->rssi_dBm,
             current->bssid.asString().c_str(), current->rssi_dBm, gain, options_.minRssiGain_dB,
             dwell, options_.minDwell_s, best->chanspec.asString().c_str()));
+}
+
+std::vector<Chanspec> channelsFromScan(
+    const CObservationWiFiScan& scan, const AccessPointSelectorOptions& options)
+{
+    std::vector<Chanspec> out;
+    for (const auto& ap : scan.accessPoints)
+    {
+        if (ap.chanspec.band != options.band || ap.rssi_dBm < options.minRssi_dBm) continue;
+        if (!options.ssidFilter.empty() && ap.ssid != options.ssidFilter) continue;
+        if (std::none_of(
+                out.begin(), out.end(),
+                [&](const Chanspec& c) { return c.sameChannel(ap.chanspec); }))
+            out.push_back(ap.chanspec);
+    }
+    std::sort(
+        out.begin(), out.end(),
+        [](const Chanspec& a, const Chanspec& b)
+        {
+            return std::make_pair(a.centerChannel, a.bandwidthMHz) <
+                   std::make_pair(b.centerChannel, b.bandwidthMHz);
+        });
+    return out;
 }
 
 }  // namespace mrpt_wifi

@@ -9,6 +9,7 @@
 #include <mrpt_wifi/sensor/UdpCsiReceiver.h>
 
 #include <algorithm>
+#include <iomanip>
 #include <set>
 #include <sstream>
 
@@ -22,7 +23,20 @@ double secondsBetween(mrpt::Clock::time_point a, mrpt::Clock::time_point b)
 {
     return std::chrono::duration<double>(b - a).count();
 }
+
+uint32_t channelKey(const Chanspec& cs)
+{
+    return (uint32_t(cs.centerChannel) << 16) | cs.bandwidthMHz |
+           (cs.band == WifiBand::Band5G ? 0x8000u : 0u);
+}
 }  // namespace
+
+double CWiFiCSISensor::Counters::ChannelUse::framesLostEstimate() const
+{
+    const double withCsi_s = time_s - downtime_s;
+    if (frames == 0 || withCsi_s <= 0) return 0.0;
+    return double(frames) / withCsi_s * downtime_s;
+}
 
 CWiFiCSISensor::CWiFiCSISensor()
     : mrpt::system::COutputLogger("CWiFiCSISensor"),
@@ -33,6 +47,8 @@ CWiFiCSISensor::CWiFiCSISensor()
 
 CWiFiCSISensor::~CWiFiCSISensor()
 {
+    if (settings_->hopping())
+        MRPT_LOG_INFO_STREAM("[" << m_sensorLabel << "] " << channelScheduleSummary());
     bearings_.reset();
     {
         std::lock_guard<std::mutex> lk(mutex_);
@@ -189,12 +205,31 @@ void CWiFiCSISensor::initialize()
             << router_->configureCommand(s.extraction));
     const auto extraction = s.extraction;
     const bool loadModule = s.loadModule;
+    // A schedule with 2.4 GHz channels (or one starting there) needs that radio bridged too.
+    bool bridge2G4 = extraction.chanspec.band == WifiBand::Band2G4;
+    for (const auto& cs : s.channelSchedule) bridge2G4 |= cs.band == WifiBand::Band2G4;
     switchTarget_ = extraction.chanspec;
     switchRequested_ = mrpt::Clock::now();
+    if (s.hopping())
+    {
+        schedule_ = s.channelSchedule;
+        hopInFlight_ = true;
+        std::lock_guard<std::mutex> lk(mutex_);
+        startVisit(extraction.chanspec, switchRequested_);
+        visitIsSwitch_ = false;  // the set-up (ssh, module) is no switch
+        std::string list;
+        for (const auto& cs : schedule_) list += " " + cs.asString();
+        MRPT_LOG_INFO_STREAM(
+            "[" << m_sensorLabel << "] channel schedule:"
+                << (s.scheduleFromScan ? std::string(" from the scans (band of ") +
+                                             extraction.chanspec.asString() + ")"
+                                       : list)
+                << ", " << s.channelDwell_s << " s on each");
+    }
     postJob(
-        [this, extraction, loadModule]
+        [this, extraction, loadModule, bridge2G4]
         {
-            if (loadModule) router_->loadFirmwareModule();
+            if (loadModule) router_->loadFirmwareModule(bridge2G4);
             router_->configure(extraction);
             postEvent(
                 [this, cs = extraction.chanspec]
@@ -205,6 +240,7 @@ void CWiFiCSISensor::initialize()
                     }
                     MRPT_LOG_INFO_STREAM(
                         "[" << m_sensorLabel << "] router configured: CSI on " << cs.asString());
+                    onChannelConfigured(cs);
                 });
         });
     if (s.transmitterMode)
@@ -226,6 +262,7 @@ void CWiFiCSISensor::initialize()
 void CWiFiCSISensor::doProcess()
 {
     runEvents();
+    if (settings_->hopping() && router_) advanceSchedule(mrpt::Clock::now());
     if (receiver_)
     {
         receiver_->receive(
@@ -308,6 +345,11 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
             return;
         }
         ++counters_.framesDelivered;
+        {
+            auto& use = counters_.channels[channelKey(frame->chanspec)];
+            use.chanspec = frame->chanspec;
+            ++use.frames;
+        }
         if (chainStates_)
         {
             chainStates_->record(*frame);
@@ -321,6 +363,13 @@ void CWiFiCSISensor::onFrame(CObservationWiFiCSI::Ptr&& frame)
             measured = secondsBetween(switchRequested_, frame->timestamp);
             lastSwitchDowntime_ = measured;
             switchTarget_.reset();
+            if (visitIsSwitch_)
+            {
+                auto& use = counters_.channels[channelKey(frame->chanspec)];
+                use.downtime_s += *measured;
+                ++use.measured;
+                counters_.maxSwitchDowntime_s = std::max(counters_.maxSwitchDowntime_s, *measured);
+            }
         }
     }
     if (measured)
@@ -339,7 +388,7 @@ void CWiFiCSISensor::startBearings()
     const auto& s = *settings_;
     // With router control the channel is known now: check its calibration before any frame.
     std::optional<Chanspec> channel;
-    if (s.routerControl) channel = s.extraction.chanspec;
+    if (s.routerControl && !s.hopping()) channel = s.extraction.chanspec;
     bearings_ =
         std::make_unique<LiveBearingWorker>(std::move(bearingProcessor_), s.bearing, channel);
     bearingStatusTime_ = mrpt::Clock::now();
@@ -443,22 +492,49 @@ void CWiFiCSISensor::requestChannel(const Chanspec& cs, const std::string& reaso
         extraction.macFilter = {selector_->locked()->bssid};
     {
         std::lock_guard<std::mutex> lk(mutex_);
+        const auto now = mrpt::Clock::now();
+        startVisit(cs, now);
+        visitIsSwitch_ = true;
         switchTarget_ = cs;
-        switchRequested_ = mrpt::Clock::now();
+        switchRequested_ = now;
         settings_->extraction.macFilter = extraction.macFilter;
     }
     MRPT_LOG_INFO_STREAM(
         "[" << m_sensorLabel << "] channel switch to " << cs.asString() << ": " << reason);
+    // The RT-AC86U has a radio per band: a schedule leaving a band stops its capture, so only
+    // the channel visited is heard.
+    std::optional<Chanspec> leaving;
+    if (settings_->hopping())
+        if (const auto current = configuredChannel(); current && current->band != cs.band)
+            leaving = current;
     postJob(
-        [this, extraction]
+        [this, extraction, leaving]
         {
-            router_->configure(extraction);
+            try
+            {
+                if (leaving) router_->stopCapture(*leaving);
+                router_->configure(extraction);
+            }
+            catch (const std::exception&)
+            {
+                // The schedule tries again after a dwell (the error is reported as usual).
+                postEvent(
+                    [this]
+                    {
+                        hopInFlight_ = false;
+                        dwellStart_ = mrpt::Clock::now();
+                    });
+                throw;
+            }
             postEvent(
                 [this, cs = extraction.chanspec]
                 {
-                    std::lock_guard<std::mutex> lk(mutex_);
-                    configured_ = cs;
-                    ++counters_.channelSwitches;
+                    {
+                        std::lock_guard<std::mutex> lk(mutex_);
+                        configured_ = cs;
+                        ++counters_.channelSwitches;
+                    }
+                    onChannelConfigured(cs);
                 });
         });
 }
@@ -504,6 +580,29 @@ void CWiFiCSISensor::requestScan()
                         scanQueued_ = false;
                     }
                     appendObservation(scan);
+                    if (settings_->scheduleFromScan)
+                    {
+                        auto options = settings_->selector;
+                        options.band = settings_->extraction.chanspec.band;
+                        auto channels = channelsFromScan(*scan, options);
+                        const bool same = channels.size() == schedule_.size() &&
+                                          std::equal(
+                                              channels.begin(), channels.end(), schedule_.begin(),
+                                              [](const Chanspec& a, const Chanspec& b)
+                                              { return a.sameChannel(b); });
+                        if (!same)
+                        {
+                            std::string list;
+                            for (const auto& cs : channels) list += " " + cs.asString();
+                            MRPT_LOG_INFO_STREAM(
+                                "[" << m_sensorLabel << "] channel schedule from the scan:"
+                                    << (list.empty() ? " no access point passes the limits "
+                                                       "(auto_min_rssi_dBm, auto_ssid): staying "
+                                                       "on the current channel"
+                                                     : list));
+                            schedule_ = std::move(channels);
+                        }
+                    }
                     if (!selector_) return;
                     const double t = mrpt::Clock::toDouble(scan->timestamp);
                     if (auto decision = selector_->onScan(*scan, t))
@@ -592,6 +691,7 @@ void CWiFiCSISensor::logStatus()
     if (c.scans) o << " | scans " << c.scans << ", switches " << c.channelSwitches;
     if (const auto d = lastSwitchDowntime())
         o << " | last switch downtime " << int(*d * 1000) << " ms";
+    if (settings_->hopping()) o << " | " << channelScheduleSummary();
     o << bearingStatus();
     if (!lastError().empty()) o << " | last error: " << lastError();
     MRPT_LOG_INFO(o.str());
@@ -699,6 +799,107 @@ CWiFiCSISensor::NoFrameDiagnosis CWiFiCSISensor::diagnoseNoFrames(
             now.assembler.asString() + ")";
     d.text = text;
     return d;
+}
+
+void CWiFiCSISensor::startVisit(const Chanspec& cs, mrpt::Clock::time_point t)
+{
+    // The visit being left: its time, and all of it without CSI if no frame came.
+    if (visiting_)
+    {
+        auto& left = counters_.channels[channelKey(*visiting_)];
+        const double stay_s = secondsBetween(visitStart_, t);
+        left.time_s += stay_s;
+        if (visitIsSwitch_ && switchTarget_ && switchTarget_->sameChannel(*visiting_))
+        {
+            left.downtime_s += stay_s;
+            ++left.withoutFrames;
+        }
+    }
+    visiting_ = cs;
+    visitStart_ = t;
+    auto& use = counters_.channels[channelKey(cs)];
+    use.chanspec = cs;
+    ++use.visits;
+}
+
+void CWiFiCSISensor::onChannelConfigured(const Chanspec& cs)
+{
+    if (!settings_->hopping()) return;
+    hopInFlight_ = false;
+    dwellStart_ = mrpt::Clock::now();
+    std::lock_guard<std::mutex> lk(mutex_);
+    // The first visit counts from the end of the set-up, which is no switch.
+    if (!visitIsSwitch_ && visiting_ && visiting_->sameChannel(cs)) visitStart_ = dwellStart_;
+}
+
+void CWiFiCSISensor::advanceSchedule(mrpt::Clock::time_point now)
+{
+    if (hopInFlight_ || schedule_.empty()) return;
+    const auto current = configuredChannel();
+    if (!current) return;
+    size_t at = schedule_.size();  // not in the schedule (a scan changed it): go to its first
+    for (size_t i = 0; i < schedule_.size(); ++i)
+        if (schedule_[i].sameChannel(*current)) at = i;
+    if (at < schedule_.size() &&
+        (schedule_.size() == 1 || secondsBetween(dwellStart_, now) < settings_->channelDwell_s))
+        return;
+    const Chanspec next = schedule_[at < schedule_.size() ? (at + 1) % schedule_.size() : 0];
+    hopInFlight_ = true;
+    {
+        std::lock_guard<std::mutex> lk(mutex_);
+        ++counters_.scheduleSwitches;
+    }
+    char reason[96];
+    std::snprintf(
+        reason, sizeof(reason), "channel schedule (%.1f s on %s)", secondsBetween(dwellStart_, now),
+        current->asString().c_str());
+    requestChannel(next, reason);
+}
+
+std::vector<Chanspec> CWiFiCSISensor::channelSchedule() const
+{
+    return schedule_;
+}
+
+std::string CWiFiCSISensor::channelScheduleSummary() const
+{
+    auto c = counters();
+    {
+        // The visit under way counts up to now.
+        std::lock_guard<std::mutex> lk(mutex_);
+        if (visiting_)
+        {
+            auto& use = c.channels[channelKey(*visiting_)];
+            const double stay_s = secondsBetween(visitStart_, mrpt::Clock::now());
+            use.time_s += stay_s;
+            if (visitIsSwitch_ && switchTarget_ && switchTarget_->sameChannel(*visiting_))
+                use.downtime_s += stay_s;
+        }
+    }
+    uint64_t measured = 0, withoutFrames = 0;
+    double downtime_s = 0, lost = 0, frames = 0;
+    for (const auto& [key, use] : c.channels)
+    {
+        measured += use.measured;
+        withoutFrames += use.withoutFrames;
+        downtime_s += use.downtime_s;
+        lost += use.framesLostEstimate();
+        frames += double(use.frames);
+    }
+    const uint64_t visits = measured + withoutFrames;
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(0) << "channel schedule: " << c.scheduleSwitches
+      << " switches";
+    if (visits)
+        o << ", time without CSI per switch " << 1e3 * downtime_s / double(visits) << " ms mean, "
+          << 1e3 * c.maxSwitchDowntime_s << " ms max";
+    if (withoutFrames) o << ", " << withoutFrames << " visits without any frame";
+    o << ", ~" << lost << " frames lost to switching (" << std::setprecision(1)
+      << (frames + lost > 0 ? 100.0 * lost / (frames + lost) : 0.0) << " %); frames per channel:";
+    for (const auto& [key, use] : c.channels)
+        o << " " << use.chanspec.asString() << " " << use.frames << " (" << use.visits
+          << " visits)";
+    return o.str();
 }
 
 CWiFiCSISensor::Counters CWiFiCSISensor::counters() const

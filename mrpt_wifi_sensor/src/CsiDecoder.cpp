@@ -1,8 +1,10 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt_wifi/obs/CommandLine.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
+#include <mrpt_wifi/sensor/Rosbag2Reader.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <mutex>
@@ -130,6 +132,15 @@ std::string CsiDecoderRegistry::names(const std::string& separator) const
 
 std::shared_ptr<const CsiDecoder> CsiDecoderRegistry::detect(const std::string& path) const
 {
+    // A ROS 2 bag is the one input that may be a directory (metadata.yaml and its files).
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+    {
+        if (auto bag = find("rosbag2"); bag && ros2::looksLikeRosbag2(path)) return bag;
+        throw std::runtime_error(
+            "'" + path +
+            "' is a directory without a ROS 2 bag (metadata.yaml, .mcap or .db3 files)");
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) throw std::runtime_error("cannot open '" + path + "'");
     std::vector<uint8_t> head(kProbeBytes);

@@ -212,6 +212,57 @@ CsiSensorSettings loadCsiSensorSettings(
                         std::string("key '") + k + "' needs bearing_algorithm (bearings are off)");
         if (s.autoChannel && !(s.scanPeriod_s > 0))
             throw std::invalid_argument("auto_channel = true needs scan_period > 0");
+        // Channel hopping (as WiROS's CSI node's channel service: the same configuration
+        // commands, one channel after the other).
+        const std::string schedule = str("channel_schedule", "");
+        s.channelDwell_s = c.read_double(section, "channel_dwell_s", 2.0);
+        if (schedule == "scan")
+            s.scheduleFromScan = true;
+        else
+            for (const auto& item : splitList(schedule))
+            {
+                Chanspec cs;
+                try
+                {
+                    cs = Chanspec::fromString(item);
+                }
+                catch (const std::invalid_argument& e)
+                {
+                    throw std::invalid_argument(
+                        "key 'channel_schedule': '" + item + "': " + e.what() +
+                        " (expected a list such as '42/80 155/80 6/20', or 'scan')");
+                }
+                for (const auto& seen : s.channelSchedule)
+                    if (seen.sameChannel(cs))
+                        throw std::invalid_argument(
+                            "key 'channel_schedule': " + cs.asString() + " is listed twice");
+                s.channelSchedule.push_back(cs);
+            }
+        if (s.hopping())
+        {
+            if (s.autoChannel)
+                throw std::invalid_argument(
+                    "channel_schedule and auto_channel = true both decide the channel: set "
+                    "auto_channel = false to hop among channels, or remove channel_schedule to "
+                    "follow the strongest access point");
+            if (!s.routerControl)
+                throw std::invalid_argument(
+                    "channel_schedule needs router_control = true (the router is retuned over "
+                    "ssh)");
+            if (s.transmitterMode)
+                throw std::invalid_argument(
+                    "channel_schedule and transmitter_mode cannot be combined (the transmitter "
+                    "sends on one channel)");
+            if (s.scheduleFromScan && !(s.scanPeriod_s > 0))
+                throw std::invalid_argument(
+                    "channel_schedule = scan needs scan_period > 0 (the scans give the channels)");
+            if (!(s.channelDwell_s > 0))
+                throw std::invalid_argument("key 'channel_dwell_s' must be > 0");
+            // A given schedule starts on its first channel.
+            if (!s.channelSchedule.empty()) s.extraction.chanspec = s.channelSchedule.front();
+        }
+        else if (!str("channel_dwell_s", "").empty())
+            throw std::invalid_argument("key 'channel_dwell_s' needs channel_schedule");
         // Files named here: from this .ini's folder (rawlog-grabber's file found on its command
         // line), arrays also by name from the data folder (mrpt_wifi/obs/ConfigPaths.h).
         const std::string iniDir = config::iniDirectory(c, section);

@@ -224,7 +224,8 @@ void LiveBearingWorker::run()
 void LiveBearingWorker::estimate(Slot& slot)
 {
     const CObservationWiFiCSI& csi = *slot.frame;
-    if (!lastChannel_ || *lastChannel_ != csi.chanspec.raw)
+    if ((!lastChannel_ || *lastChannel_ != csi.chanspec.raw) &&
+        reportedChannels_.insert(csi.chanspec.raw).second)
     {
         lastChannel_ = csi.chanspec.raw;
         // The calibration holds one phase per array element, which need not be one per row (an
@@ -313,15 +314,7 @@ LiveBearingWorker::Message LiveBearingWorker::describeCalibration(
     {
         return {true, std::string(e.what()) + "; frames on " + cs.asString() + " get no bearing"};
     }
-    if (!c)
-    {
-        std::string have;
-        for (const auto& a : store.available(device)) have += (have.empty() ? "" : ", ") + a;
-        return {
-            true, "no calibration for " + cs.asString() + " in '" + store.path() + "' (has " +
-                      (have.empty() ? std::string("nothing for '") + device + "'" : have) +
-                      "): " + uncal};
-    }
+    if (!c) return {true, store.missingChannelAdvice(device, cs) + "; " + uncal};
     const std::string file = c->sourcePath.empty() ? store.path() : c->sourcePath;
     if (maxAge_days > 0)
     {

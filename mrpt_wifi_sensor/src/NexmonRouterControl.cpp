@@ -95,13 +95,16 @@ std::string NexmonRouterControl::interfaceFor(WifiBand band) const
     return band == WifiBand::Band5G ? options_.interface5G : options_.interface2G4;
 }
 
-void NexmonRouterControl::loadFirmwareModule()
+void NexmonRouterControl::loadFirmwareModule(bool bridge2G4)
 {
     // rmmod may fail when the module isn't loaded yet: that's fine, insmod decides.
-    shell_->run(
-        "rmmod dhd; insmod " + shellQuote(options_.modulePath) + " && brctl addif " +
-            shellQuote(options_.bridge) + " " + shellQuote(options_.interface5G),
-        options_.commandTimeout_s);
+    std::string command = "rmmod dhd; insmod " + shellQuote(options_.modulePath) +
+                          " && brctl addif " + shellQuote(options_.bridge) + " " +
+                          shellQuote(options_.interface5G);
+    if (bridge2G4)
+        command += " && brctl addif " + shellQuote(options_.bridge) + " " +
+                   shellQuote(options_.interface2G4);
+    shell_->run(command, options_.commandTimeout_s);
 }
 
 std::string NexmonRouterControl::configureCommand(const CsiExtractionSettings& s) const
@@ -123,6 +126,18 @@ std::string NexmonRouterControl::configureCommand(const CsiExtractionSettings& s
     // One round trip; && stops at the first failure so its error is the one reported.
     return "wl -i " + iface + " chanspec " + cs + " && wl -i " + iface +
            " monitor 1 && nexutil -I " + iface + " -s500 -b -l34 -v $(" + params + ")";
+}
+
+std::string NexmonRouterControl::stopCaptureCommand(const Chanspec& cs) const
+{
+    const std::string iface = shellQuote(interfaceFor(cs.band));
+    return "nexutil -I " + iface + " -s500 -b -l34 -v $(makecsiparams -e 0 -c " +
+           cs.asBroadcomString() + ")";
+}
+
+void NexmonRouterControl::stopCapture(const Chanspec& cs)
+{
+    shell_->run(stopCaptureCommand(cs), options_.commandTimeout_s);
 }
 
 void NexmonRouterControl::configure(const CsiExtractionSettings& s)

@@ -18,7 +18,7 @@ const char* kHeaderDefinition =
     "uint32 seq\n"
     "time stamp\n"
     "string frame_id\n";
-const char* kWifiFields =
+const char* const kWifiFields =
     "std_msgs/Header header\n"
     "uint8 ap_id\n"
     "uint8[] txmac\n"
@@ -35,7 +35,7 @@ const char* kWifiFields =
     "float64[] csi_imag\n"
     "string rx_id\n"
     "uint32 msg_id\n";
-const char* kBearingFields =
+const char* const kBearingFields =
     "std_msgs/Header header\n"
     "uint8 ap_id\n"
     "uint8[] txmac\n"
@@ -182,6 +182,15 @@ std::string messageMd5(
         text += (text.empty() ? "" : "\n") + type + " " + name;
     }
     return mrpt::system::md5(text);
+}
+
+const char* wifiFieldLines()
+{
+    return kWifiFields;
+}
+const char* bearingFieldLines()
+{
+    return kBearingFields;
 }
 
 const MessageType& wifiType()

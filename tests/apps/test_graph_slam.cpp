@@ -51,6 +51,43 @@ TEST(GraphSlamKnownAps, HalvesTheMedianAteOfOdometry)
     EXPECT_EQ(r.graph.edges.size(), r.poses.size() - 1);
 }
 
+TEST(GraphSlamKnownAps, ClearPlacementNeverInitialisesUnknownAps)
+{
+    // Issue 56: with known APs the unknown-AP machinery (triangulating every AP from rays on
+    // the drifting odometry, the estimated-AP solution) ran on every call and took nearly all
+    // of the 13 minutes of a 30-minute building drive. When every AP is heard from the start it
+    // must not run at all; when the start can't place the trajectory it still does.
+    WorldOptions wo = hallLoop();
+    wo.duration_s = 120;
+    const auto w = makeWorld(hallAps(), wo);
+    GraphSlamInput in;
+    in.odometry = w.odometry;
+    in.bearings = w.bearings;
+    in.aps = w.aps;
+    GraphSlamOptions o;
+    o.apsKnown = true;
+    std::vector<std::string> lines;
+    o.progress = [&](const std::string& line) { lines.push_back(line); };
+    const auto r = solveBearingGraph(in, o);
+    EXPECT_EQ(r.apTriangulations, 0u) << r.placement;
+    for (const auto& p : r.phases) EXPECT_NE(p.name, "unknown-AP initialisation");
+    EXPECT_LT(absoluteTrajectoryError(r.poses, w.truth).stats.median, 0.15);
+    // Progress: the placement search and each solve, one line each.
+    ASSERT_FALSE(lines.empty());
+    EXPECT_NE(lines.front().find("placement search"), std::string::npos) << lines.front();
+    EXPECT_LT(lines.size(), 10u);
+
+    // Only one AP heard in the first 40 s: the placement is ambiguous, the estimated-AP start
+    // runs (and triangulates).
+    std::vector<BearingRecord> late;
+    for (const auto& b : w.bearings)
+        if (b.t >= w.truth.t.front() + 40 || b.transmitter == w.aps.at(0).mac) late.push_back(b);
+    in.bearings = late;
+    o.progress = nullptr;
+    const auto doubtful = solveBearingGraph(in, o);
+    EXPECT_GT(doubtful.apTriangulations, 0u);
+}
+
 TEST(GraphSlamUnknownAps, EstimatesApsAndTrajectory)
 {
     const auto w = makeWorld(hallAps(), hallLoop());

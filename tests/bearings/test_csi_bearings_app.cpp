@@ -165,7 +165,10 @@ TEST(BearingApp, CalibrationForAnotherChannelOrDeviceFailsBeforeWork)
         program() + " " + simulatedRawlog() + " " + tmp.file("o2.rawlog") + " --calib " +
         tmp.file("calib") + " --require-calib -q");
     EXPECT_NE(r.exitCode, 0);
-    EXPECT_NE(r.output.find("no phase calibration"), std::string::npos) << r.output;
+    // The channel, how many frames it holds and what to run.
+    EXPECT_NE(r.output.find("frames on 155/80: no calibration for 155/80"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("ch155_80mhz.yaml"), std::string::npos) << r.output;
 }
 
 TEST(BearingApp, ArrayNotMatchingTheCsiFailsBeforeWork)

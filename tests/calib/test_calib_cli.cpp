@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 #include <mrpt/system/filesystem.h>
 
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "CalibTestSupport.h"
@@ -258,4 +261,85 @@ TEST_F(CalibCli, TransmitChainsAndAodOnlyWhereCalibrated)
         EXPECT_EQ(has, "1");
         EXPECT_NE(aod, "");
     }
+}
+
+TEST_F(CalibCli, EveryChannelOfAHoppingDriveCalibratedAndUsedAtOnce)
+{
+    // share/scenarios/hopping.yaml: APs on 42/80, 155/80 and 6/20, the receive chains' offsets
+    // moving from channel to channel with their delays. One drive, one file per channel, each
+    // within 1° RMS of the simulator's truth; csi-bearings then uses all three at once.
+    const std::string scenario =
+        std::string(MRPT_WIFI_SOURCE_DIR) + "/share/scenarios/hopping.yaml";
+    const std::string dir = root_ + "/hopping", out = dir + "/calib";
+    mrpt::system::createDirectory(dir);
+    auto r =
+        run(kBin + "/wifi-sim -q -d 40 " + scenario + " " + dir + "/drive.rawlog --truth-dir " +
+            dir + "/truth");
+    ASSERT_EQ(r.rc, 0) << r.err;
+    // The simulated receiver has no jump states: the files hold the plain per-subcarrier phases.
+    const std::string calibrate = cal_ + dir + "/drive.rawlog --array " + kArrays +
+                                  "rt-ac86u.yaml --transmitters " + dir +
+                                  "/truth/transmitters.yaml --poses " + dir +
+                                  "/truth/trajectory_tum.txt --chain-states off --out ";
+    r = run(calibrate + out);
+    ASSERT_EQ(r.rc, 0) << r.out << r.err;
+    EXPECT_NE(r.out.find("Channels (3 in the recording)"), std::string::npos) << r.out;
+
+    mrpt_wifi::sim::Simulator truth(mrpt_wifi::sim::Scenario::fromYamlFile(scenario));
+    std::map<std::string, double> meanOffset1_deg;
+    for (const char* cs : {"42/80", "155/80", "6/20"})
+    {
+        const auto chanspec = mrpt_wifi::Chanspec::fromString(cs);
+        const std::string file = mrpt_wifi::PhaseCalibration::pathFor(out, "rt-ac86u", chanspec);
+        ASSERT_TRUE(mrpt::system::fileExists(file)) << cs << "\n" << r.out;
+        const auto c = mrpt_wifi::PhaseCalibration::fromYamlFile(file);
+        EXPECT_TRUE(c.chanspec.sameChannel(chanspec));
+        const double rms = calibtest::phaseErrorRms_deg(c, truth.hardware());
+        std::cout << "[ " << cs << " ] phase RMS error vs truth " << rms << " deg\n";
+        EXPECT_LT(rms, 1.0) << cs;
+        EXPECT_NE(r.out.find(std::string(cs) + " "), std::string::npos);
+        meanOffset1_deg[cs] = c.phaseAt(1, 0) * 180 / M_PI;
+    }
+    // The channels' offsets differ (the chains' delays): one calibration could not serve all.
+    EXPECT_GT(
+        std::abs(mrpt_wifi::wrapAngle(
+            (meanOffset1_deg["42/80"] - meanOffset1_deg["155/80"]) * M_PI / 180)),
+        10 * M_PI / 180);
+
+    // Bearings from every AP, each channel with its own calibration, none missing (on a few
+    // seconds of the same receiver: the scenario's seed).
+    r = run(kBin + "/wifi-sim -q -d 4 " + scenario + " " + dir + "/short.rawlog");
+    ASSERT_EQ(r.rc, 0) << r.err;
+    r =
+        run(kBin + "/csi-bearings -q -a aoa_only --require-calib -c " + out + " " + dir +
+            "/short.rawlog " + dir + "/bearings.rawlog");
+    ASSERT_EQ(r.rc, 0) << r.out << r.err;
+    for (const char* mac : {"02:00:00:00:06:01", "02:00:00:00:06:02", "02:00:00:00:06:03"})
+    {
+        const auto at = r.out.find(mac);
+        ASSERT_NE(at, std::string::npos) << r.out;
+        std::istringstream row(r.out.substr(at + std::strlen(mac)));
+        uint64_t frames = 0, bearings = 0;
+        row >> frames >> bearings;
+        EXPECT_GT(bearings, frames / 2) << mac << "\n" << r.out;
+    }
+    // A channel without its file is named, with what to run.
+    std::remove(mrpt_wifi::PhaseCalibration::pathFor(
+                    out, "rt-ac86u", mrpt_wifi::Chanspec::fromString("6/20"))
+                    .c_str());
+    r =
+        run(kBin + "/csi-bearings -q -a aoa_only -c " + out + " " + dir + "/short.rawlog " + dir +
+            "/bearings2.rawlog");
+    EXPECT_EQ(r.rc, 0) << r.err;
+    EXPECT_NE(
+        r.err.find("frames on 6/20 get uncalibrated bearings: no calibration for 6/20"),
+        std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("run wifi-calibrate"), std::string::npos) << r.err;
+    r =
+        run(kBin + "/csi-bearings -q -a aoa_only --require-calib -c " + out + " " + dir +
+            "/short.rawlog " + dir + "/bearings3.rawlog");
+    EXPECT_NE(r.rc, 0);
+    EXPECT_NE(r.err.find("6/20"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("ch6_20mhz.yaml"), std::string::npos) << r.err;
 }

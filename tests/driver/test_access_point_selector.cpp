@@ -77,3 +77,26 @@ TEST(AccessPointSelector, RespectsMinimumRssiAndSsid)
     EXPECT_FALSE(sel.onScan(scanOf({ap("02:00:00:00:00:02", -40, "155/80", "guests")}), 1));
     EXPECT_TRUE(sel.onScan(scanOf({ap("02:00:00:00:00:03", -70, "42/80", "robots")}), 2));
 }
+
+TEST(AccessPointSelector, ChannelScheduleFromAScan)
+{
+    // channel_schedule = scan: each channel once, in channel order, within the band and limits.
+    AccessPointSelectorOptions o;
+    o.minRssi_dBm = -80;
+    o.ssidFilter = "lab";
+    const auto channels = channelsFromScan(
+        scanOf(
+            {ap("02:00:00:00:00:01", -50, "155/80"), ap("02:00:00:00:00:02", -60, "42/80"),
+             ap("02:00:00:00:00:03", -55, "157/80"),  // 155/80 again (control channel 157)
+             ap("02:00:00:00:00:04", -40, "6"),       // 2.4 GHz: another band
+             ap("02:00:00:00:00:05", -85, "106/80"),  // too weak
+             ap("02:00:00:00:00:06", -45, "58/80", "guest")}),
+        o);
+    ASSERT_EQ(channels.size(), 2u);
+    EXPECT_EQ(channels[0].asString(), "42/80");
+    EXPECT_EQ(channels[1].asString(), "155/80");
+    o.band = WifiBand::Band2G4;
+    const auto g = channelsFromScan(scanOf({ap("02:00:00:00:00:04", -40, "6")}), o);
+    ASSERT_EQ(g.size(), 1u);
+    EXPECT_EQ(g[0].centerChannel, 6);
+}

@@ -297,3 +297,72 @@ TEST(GrabberEmulator, PcapSourceReplaysACaptureAtItsRecordedPace)
     EXPECT_LT(t1 - t0, 0.2);
     EXPECT_GT(t1 - t0, 0.02);
 }
+
+TEST(GrabberEmulator, ChannelScheduleRecordsEveryChannelAndCountsTheSwitches)
+{
+    // share/scenarios/hopping.yaml: one AP on each of 42/80, 155/80 and 6/20. The grabber
+    // visits the three channels in turn (channel_schedule), half a second each.
+    test::TempDir tmp;
+    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    const double retuneDelay_s = 0.05;
+    test::EmulatorProcess emu(
+        {"--scenario", scenario("hopping"), "--retune-delay", std::to_string(retuneDelay_s)}, port,
+        60);
+    ASSERT_TRUE(emu.ready()) << emu.log();
+    test::SshdFixture sshd(emu.toolsDir());
+    MRPT_WIFI_REQUIRE_SSHD(sshd);
+    auto keys = sshKeys(sshd);
+    keys["udp_port"] = std::to_string(port);
+    keys["channel_schedule"] = "42/80 155/80 6/20";
+    keys["channel_dwell_s"] = "0.5";
+    keys["rawlog_prefix"] = "hop";
+    const auto rec = test::runGrabber(
+        tmp, test::deriveGrabberIni("csi_channel_schedule.ini", keys, tmp.file("hop.ini")), 5.0);
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    const std::string tail = rec.log.substr(rec.log.size() > 6000 ? rec.log.size() - 6000 : 0);
+
+    // Frames from every channel, each from the AP on that channel only.
+    const std::map<unsigned, std::string> apOn = {
+        {42, "02:00:00:00:06:01"}, {155, "02:00:00:00:06:02"}, {6, "02:00:00:00:06:03"}};
+    std::map<unsigned, size_t> perChannel;
+    size_t runs = 0;
+    unsigned previous = 0;
+    for (const auto& f : rec.frames)
+    {
+        const unsigned ch = f->chanspec.centerChannel;
+        ASSERT_TRUE(apOn.count(ch)) << f->chanspec.asString();
+        EXPECT_EQ(f->transmitter.asString(), apOn.at(ch));
+        ++perChannel[ch];
+        runs += ch != previous;
+        previous = ch;
+    }
+    for (const auto& [ch, mac] : apOn)
+        EXPECT_GT(perChannel[ch], 0u) << "channel " << ch << "\n" << tail;
+
+    // The closing summary: the switches, what each cost, the frames per channel.
+    const size_t closing = rec.log.rfind("channel schedule: ");
+    ASSERT_NE(closing, std::string::npos) << tail;
+    const std::string summary = rec.log.substr(closing);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(
+        summary, m,
+        std::regex("channel schedule: ([0-9]+) switches, time without CSI per switch ([0-9]+) ms "
+                   "mean, ([0-9]+) ms max.*frames lost to switching.*frames per channel: "
+                   "6/20 ([0-9]+) \\(([0-9]+) visits\\) 42/80 ([0-9]+) \\(([0-9]+) visits\\) "
+                   "155/80 ([0-9]+) \\(([0-9]+) visits\\)")))
+        << tail;
+    const int switches = std::stoi(m[1]);
+    EXPECT_GE(switches, 3) << tail;  // at least one full round
+    // A switch that retunes a radio costs at least its retune (the emulator's) plus the ssh
+    // round trip (back to a band whose radio kept its channel, only the round trip).
+    EXPECT_GE(std::stoi(m[3]), int(retuneDelay_s * 1000)) << tail;
+    EXPECT_GT(std::stoi(m[2]), 0);
+    EXPECT_GE(std::stoi(m[3]), std::stoi(m[2]));
+    const int visits = std::stoi(m[5]) + std::stoi(m[7]) + std::stoi(m[9]);
+    EXPECT_EQ(visits, switches + 1);  // the start-up configuration is the first visit
+    // Only the channel being visited is heard (the 2.4 GHz radio stops when the schedule
+    // moves to 5 GHz): the recording is one run of frames per visit, not an interleaving.
+    EXPECT_LE(runs, size_t(visits)) << runs << " runs of frames on one channel";
+    std::cout << rec.frames.size() << " frames: 6/20 " << perChannel[6] << ", 42/80 "
+              << perChannel[42] << ", 155/80 " << perChannel[155] << "; " << m[0].str() << "\n";
+}

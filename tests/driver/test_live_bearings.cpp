@@ -313,6 +313,9 @@ TEST(LiveBearingWorker, CalibrationIsReportedPerChannel)
     EXPECT_TRUE(m.problem);
     EXPECT_NE(m.text.find("no calibration for 106/80"), std::string::npos) << m.text;
     EXPECT_NE(m.text.find("ch155_80mhz.yaml"), std::string::npos) << m.text;  // what there is
+    // ... and what to run for the missing one (a channel schedule visits it).
+    EXPECT_NE(m.text.find("run wifi-calibrate"), std::string::npos) << m.text;
+    EXPECT_NE(m.text.find("ch106_80mhz.yaml"), std::string::npos) << m.text;
 
     // One file for another channel, or another device.
     s.calibration = PhaseCalibration::pathFor(dir, "rt-ac86u", Chanspec::fromString("155/80"));

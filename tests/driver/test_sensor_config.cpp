@@ -80,3 +80,32 @@ TEST(CWiFiCSISensorConfig, ValuesForTheRouterShellAreValidated)
             "setup_module_path = /jffs/nexmon/dhd_v2.ko\n"),
         "");
 }
+
+TEST(CWiFiCSISensorConfig, ChannelScheduleAndItsConflicts)
+{
+    const std::string base = "[CSI]\nprocess_rate = 100\nrouter_control = true\n";
+    EXPECT_EQ(
+        test::sensorConfigError(
+            base + "channel_schedule = 36/80 149/80 6/20\nchannel_dwell_s = 1.5\n"),
+        "");
+    EXPECT_EQ(test::sensorConfigError(base + "channel_schedule = scan\nscan_period = 10\n"), "");
+    // Both hopping and following the strongest AP: which one decides is named.
+    auto e = test::sensorConfigError(
+        base + "channel_schedule = 42/80 155/80\nauto_channel = true\nscan_period = 10\n");
+    EXPECT_NE(e.find("channel_schedule and auto_channel"), std::string::npos) << e;
+    e = test::sensorConfigError("[CSI]\nprocess_rate = 100\nchannel_schedule = 42/80 155/80\n");
+    EXPECT_NE(e.find("channel_schedule needs router_control"), std::string::npos) << e;
+    e = test::sensorConfigError(base + "channel_schedule = scan\n");
+    EXPECT_NE(e.find("scan_period"), std::string::npos) << e;
+    e = test::sensorConfigError(base + "channel_schedule = 42/80 15x/80\n");
+    EXPECT_NE(e.find("'15x/80'"), std::string::npos) << e;
+    e = test::sensorConfigError(base + "channel_schedule = 42/80 36/80\n");  // the same channel
+    EXPECT_NE(e.find("listed twice"), std::string::npos) << e;
+    e = test::sensorConfigError(base + "channel_schedule = 42/80 155/80\nchannel_dwell_s = 0\n");
+    EXPECT_NE(e.find("channel_dwell_s"), std::string::npos) << e;
+    e = test::sensorConfigError(base + "channel_dwell_s = 3\n");
+    EXPECT_NE(e.find("channel_dwell_s' needs channel_schedule"), std::string::npos) << e;
+    e = test::sensorConfigError(
+        base + "channel_schedule = 42/80 155/80\ntransmitter_mode = true\n");
+    EXPECT_NE(e.find("transmitter_mode"), std::string::npos) << e;
+}

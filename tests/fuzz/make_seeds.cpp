@@ -6,13 +6,20 @@
 //                                         that decoder (a declared length that disagrees
 //                                         with the bytes), so the fuzzer starts at each;
 //                                         FORMAT rosmessages: rf_msgs/Wifi and Bearing bytes;
+//                                         FORMAT rosbag2: fuzz_rosbag2's MCAP files (every
+//                                         chunk compression, with and without CRCs and
+//                                         summary), CDR messages and definitions;
 //                                         FORMAT text, DATA_DIR share/: fuzz_text_inputs
+#include <lz4frame.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/sensor/NexmonFormat.h>
 #include <mrpt_wifi/sensor/PcapIO.h>
+#include <mrpt_wifi/sensor/Ros2Messages.h>
 #include <mrpt_wifi/sensor/RosMessages.h>
+#include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -183,6 +190,142 @@ std::map<std::string, Bytes> rosMessageCases()
     return c;
 }
 
+/** A minimal MCAP encoder (https://mcap.dev/spec) for fuzz_rosbag2's seeds, independent of the
+ *  reader under test: one schema and channel for rf_msgs/msg/Wifi, one for std_msgs/msg/String,
+ *  all records in one chunk (compression "zstd", "lz4", "none") or, with "unchunked", directly
+ *  in the data section. */
+Bytes mcapSeed(const std::string& compression, bool withCrcs, bool withSummary)
+{
+    const auto le = [](Bytes& b, uint64_t v, int n)
+    {
+        for (int i = 0; i < n; ++i) b.push_back(uint8_t(v >> (8 * i)));
+    };
+    const auto str = [&](Bytes& b, const std::string& s)
+    {
+        le(b, s.size(), 4);
+        b.insert(b.end(), s.begin(), s.end());
+    };
+    const auto record = [&](Bytes& out, uint8_t op, const Bytes& content)
+    {
+        out.push_back(op);
+        le(out, content.size(), 8);
+        out.insert(out.end(), content.begin(), content.end());
+    };
+    const auto crc = [&](const Bytes& b)
+    { return withCrcs ? uint32_t(crc32(0, b.data(), uInt(b.size()))) : 0u; };
+    Bytes records;
+    const auto schema = [&](uint16_t id, const std::string& name, const std::string& text)
+    {
+        Bytes c;
+        le(c, id, 2), str(c, name), str(c, "ros2msg"), str(c, text);
+        record(records, 0x03, c);
+    };
+    const auto channel = [&](uint16_t id, uint16_t schemaId, const std::string& topic)
+    {
+        Bytes c, metadata;
+        le(c, id, 2), le(c, schemaId, 2), str(c, topic), str(c, "cdr");
+        str(metadata, "offered_qos_profiles"), str(metadata, "");
+        le(c, metadata.size(), 4);
+        c.insert(c.end(), metadata.begin(), metadata.end());
+        record(records, 0x04, c);
+    };
+    const auto message = [&](uint16_t channelId, uint64_t t, const Bytes& data)
+    {
+        Bytes c;
+        le(c, channelId, 2), le(c, 0, 4), le(c, t, 8), le(c, t, 8);
+        c.insert(c.end(), data.begin(), data.end());
+        record(records, 0x05, c);
+    };
+    schema(1, ros2::wifiType().name, ros2::wifiType().definition);
+    schema(2, "std_msgs/msg/String", "string data\n");
+    channel(1, 1, "/csi");
+    channel(2, 2, "/chatter");
+    const uint64_t t0 = 1700000000ull * 1000000000ull;
+    for (unsigned i = 0; i < 2; ++i)
+    {
+        auto w = ros1::fromObservation(
+            *test::syntheticFrame(1, 2, 20, uint16_t(i)), "rx" + std::to_string(i));
+        message(1, t0 + i, ros2::serializeCdr(w));
+    }
+    message(2, t0 + 5, Bytes{0, 1, 0, 0, 3, 0, 0, 0, 'h', 'i', 0});
+    Bytes packed = records;
+    if (compression == "zstd")
+    {
+        packed.resize(ZSTD_compressBound(records.size()));
+        packed.resize(
+            ZSTD_compress(packed.data(), packed.size(), records.data(), records.size(), 3));
+    }
+    else if (compression == "lz4")
+    {
+        packed.resize(LZ4F_compressFrameBound(records.size(), nullptr));
+        packed.resize(LZ4F_compressFrame(
+            packed.data(), packed.size(), records.data(), records.size(), nullptr));
+    }
+    Bytes file = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+    Bytes header;
+    str(header, "ros2"), str(header, "fuzz_make_seeds");
+    record(file, 0x01, header);
+    if (compression == "unchunked") file.insert(file.end(), records.begin(), records.end());
+    Bytes chunk;
+    le(chunk, t0, 8), le(chunk, t0 + 5, 8), le(chunk, records.size(), 8),
+        le(chunk, crc(records), 4);
+    str(chunk, compression == "none" ? "" : compression);
+    le(chunk, packed.size(), 8);
+    chunk.insert(chunk.end(), packed.begin(), packed.end());
+    if (compression != "unchunked") record(file, 0x06, chunk);
+    Bytes dataEnd;
+    le(dataEnd, crc(file), 4);
+    record(file, 0x0F, dataEnd);
+    const uint64_t summaryStart = file.size();
+    if (withSummary)
+    {
+        Bytes stats;  // Statistics: counts only
+        le(stats, 3, 8), le(stats, 2, 2), le(stats, 2, 4), le(stats, 0, 4), le(stats, 0, 4);
+        le(stats, 1, 4), le(stats, t0, 8), le(stats, t0 + 5, 8), le(stats, 0, 4);
+        record(file, 0x0B, stats);
+    }
+    Bytes footer;
+    le(footer, withSummary ? summaryStart : 0, 8), le(footer, 0, 8);
+    Bytes covered(file.begin() + long(summaryStart), file.end());
+    covered.push_back(0x02);
+    le(covered, 20, 8);
+    covered.insert(covered.end(), footer.begin(), footer.end());
+    le(footer, withSummary ? crc(covered) : 0, 4);
+    record(file, 0x02, footer);
+    file.insert(file.end(), {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'});
+    return file;
+}
+
+/** fuzz_rosbag2: the first byte picks the input kind (0 MCAP, 1 CDR, 2 definition text). */
+std::map<std::string, Bytes> rosbag2Cases()
+{
+    std::map<std::string, Bytes> c;
+    const auto prefixed = [](uint8_t kind, Bytes b)
+    {
+        b.insert(b.begin(), kind);
+        return b;
+    };
+    for (const std::string compression : {"zstd", "lz4", "none"})
+        c["mcap-" + compression] = prefixed(0, mcapSeed(compression, true, true));
+    // Without CRCs a mutation inside the chunk reaches the record parser.
+    c["mcap-zstd-no-crc-no-summary"] = prefixed(0, mcapSeed("zstd", false, false));
+    c["mcap-none-no-crc-no-summary"] = prefixed(0, mcapSeed("none", false, false));
+    c["mcap-unchunked"] = prefixed(0, mcapSeed("unchunked", true, true));
+    const auto wifi = ros1::fromObservation(*test::syntheticFrame(2, 2, 20, 3), "rx");
+    c["cdr-wifi"] = prefixed(1, ros2::serializeCdr(wifi));
+    auto shortCsi = wifi;
+    shortCsi.csiImag.pop_back();
+    c["cdr-wifi-csi-shorter-than-n_sub-rows-cols"] = prefixed(1, ros2::serializeCdr(shortCsi));
+    ros1::BearingMessage b;
+    b.txmac = {2, 0, 0, 0, 10, 1};
+    b.rssi = {-40};
+    b.aoa = {0.5};
+    c["cdr-bearing"] = prefixed(1, ros2::serializeCdr(b));
+    const std::string& d = ros2::wifiType().definition;
+    c["definition-wifi"] = prefixed(2, Bytes(d.begin(), d.end()));
+    return c;
+}
+
 /** fuzz_text_inputs: the first byte picks the reader (0 bearings CSV, 1 TUM, 2 WSR-style CSV
  *  trajectory, 3 AP map YAML, 4 .ini). The project's shipped YAML and .ini files from
  *  SHARE_DIR, and small valid CSV and trajectories in every column layout the readers take. */
@@ -282,6 +425,8 @@ int main(int argc, char** argv)
         cases = nexmonCases(dir);
     else if (format == "rosmessages")
         cases = rosMessageCases();
+    else if (format == "rosbag2")
+        cases = rosbag2Cases();
     else if (format == "text")
         cases = textCases(data);
     else
@@ -292,7 +437,9 @@ int main(int argc, char** argv)
     for (const auto& [name, bytes] : cases)
     {
         std::string file =
-            (format == "rosmessages" || format == "text" ? "" : "length-check-") + name;
+            (format == "rosmessages" || format == "rosbag2" || format == "text" ? ""
+                                                                                : "length-check-") +
+            name;
         std::replace(file.begin(), file.end(), '/', '_');
         writeFile(dir / file, bytes);
     }

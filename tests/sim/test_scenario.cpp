@@ -197,8 +197,9 @@ TEST(Scenario, FromFileReportsTheFileName)
 // transmitter and odometry.
 TEST(Scenario, SampleScenariosLoadAndSimulate)
 {
-    const std::vector<std::string> names{"calibration", "bearing", "kidnapped",      "iot",
-                                         "loop",        "roaming", "calibration-2g4"};
+    const std::vector<std::string> names{"calibration", "bearing", "kidnapped",       "iot",
+                                         "loop",        "roaming", "calibration-2g4", "hopping",
+                                         "building"};
     for (const auto& name : names)
     {
         SCOPED_TRACE(name);

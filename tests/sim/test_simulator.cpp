@@ -455,6 +455,51 @@ TEST(Simulator, RebootDrawsNewPhaseOffsets)
     EXPECT_NE(sim.hardware().chain(cs, 1).phaseOffset_rad, before);
 }
 
+TEST(Simulator, ChainOffsetsFollowTheirDelaysAcrossChannels)
+{
+    // offset_i(c) = offset_i(ref) − 2π·(f_c − f_ref)·τ_i: the reference is the first
+    // transmitter's channel (155/80), τ_i drawn (σ 1 ns) or listed.
+    Scenario sc = baseScenario();
+    ASSERT_TRUE(sc.impairments.chainPhaseReference);
+    EXPECT_EQ(sc.impairments.chainPhaseReference->asString(), "155/80");
+    const Chanspec ref = Chanspec::make(155, 80);
+    for (const bool listed : {false, true})
+    {
+        if (listed) sc.impairments.chainDelays_s = {0.0, 0.5e-9, -1.2e-9, 2.0e-9};
+        Simulator sim(sc);
+        const auto& hw = sim.hardware();
+        for (unsigned rx = 1; rx < 4; ++rx)
+        {
+            const double tau = hw.chainDelay_s(rx);
+            if (listed) EXPECT_EQ(tau, sc.impairments.chainDelays_s[rx]);
+            EXPECT_GT(std::abs(tau), 1e-12) << "chain " << rx;
+            for (const char* other : {"42/80", "106/80", "6/20", "36/20"})
+            {
+                const Chanspec cs = Chanspec::fromString(other);
+                const double expected =
+                    hw.chain(ref, rx).phaseOffset_rad -
+                    2 * M_PI * (cs.centerFrequencyHz() - ref.centerFrequencyHz()) * tau;
+                EXPECT_NEAR(wrapToPi(hw.chain(cs, rx).phaseOffset_rad - expected), 0.0, 1e-9)
+                    << other << " chain " << rx;
+            }
+        }
+    }
+    // Without delays every channel has the reference's offsets; gains and ripple stay per
+    // channel.
+    sc.impairments.chainDelays_s = {0.0, 0.0, 0.0, 0.0};
+    Simulator flat(sc);
+    const Chanspec low = Chanspec::make(42, 80);
+    for (unsigned rx = 0; rx < 4; ++rx)
+    {
+        EXPECT_NEAR(
+            wrapToPi(
+                flat.hardware().chain(low, rx).phaseOffset_rad -
+                flat.hardware().chain(ref, rx).phaseOffset_rad),
+            0.0, 1e-12);
+        EXPECT_NE(flat.hardware().chain(low, rx).gain_dB, flat.hardware().chain(ref, rx).gain_dB);
+    }
+}
+
 TEST(Simulator, TruthGeometry)
 {
     Simulator sim(baseScenario());

@@ -81,7 +81,8 @@ enum RngTag : uint64_t
     kTagSequence,
     kTagTxChain = 0x7478,    //!< transmit chains ("tx"; apart from the sequential tags)
     kTagJumpPhase = 0x6a70,  //!< per-state phase of the jump states ("jp")
-    kTagRetry = 0x7274       //!< 802.11 retries: whether, when, and their draws ("rt")
+    kTagRetry = 0x7274,      //!< 802.11 retries: whether, when, and their draws ("rt")
+    kTagChainDelay = 0x6364  //!< receive chains' delays across channels ("cd")
 };
 
 }  // namespace mrpt_wifi::sim::detail

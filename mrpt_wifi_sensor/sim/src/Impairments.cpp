@@ -1,5 +1,6 @@
 /* mrpt_wifi — WiFi channel state information for MRPT.  */
 #include <mrpt/random/RandomGenerators.h>
+#include <mrpt_wifi/obs/AntennaArray.h>
 #include <mrpt_wifi/obs/Subcarriers.h>
 #include <mrpt_wifi/sim/Impairments.h>
 
@@ -68,6 +69,12 @@ const HardwareModel::ChannelCache& HardwareModel::cacheFor(const Chanspec& cs) c
     auto it = cache_.find(key);
     if (it != cache_.end()) return it->second;
 
+    // Offsets on the reference channel, which the others follow through the chains' delays.
+    const auto& ref = spec_.chainPhaseReference;
+    const bool followDelays = spec_.antennaPhaseOffsets && ref && !ref->sameChannel(cs);
+    const std::vector<ChainResponse> refChains =
+        followDelays ? cacheFor(*ref).chains : std::vector<ChainResponse>();
+
     ChannelCache c;
     const unsigned nfft = cs.nfft();
     c.chains.resize(nRx_);
@@ -87,6 +94,10 @@ const HardwareModel::ChannelCache& HardwareModel::cacheFor(const Chanspec& cs) c
             ch.rippleAmplitude_rad.push_back(rng.drawGaussian1D(0.0, sigmaTerm));
             ch.ripplePhase_rad.push_back(rng.drawUniform(-M_PI, M_PI));
         }
+        if (followDelays)
+            ch.phaseOffset_rad = wrapAngle(
+                refChains[rx].phaseOffset_rad -
+                2 * M_PI * (cs.centerFrequencyHz() - ref->centerFrequencyHz()) * chainDelay_s(rx));
         const double amp = std::pow(10.0, ch.gain_dB / 20.0);
         for (unsigned bin = 0; bin < nfft; ++bin)
         {
@@ -106,6 +117,15 @@ const ChainResponse& HardwareModel::chain(const Chanspec& cs, unsigned rx) const
 const std::vector<std::complex<float>>& HardwareModel::chainFactors(const Chanspec& cs) const
 {
     return cacheFor(cs).factors;
+}
+
+double HardwareModel::chainDelay_s(unsigned rx) const
+{
+    if (!spec_.chainDelays_s.empty())
+        return rx < spec_.chainDelays_s.size() ? spec_.chainDelays_s[rx] : 0.0;
+    // A property of the device (its cables and filters), the same at every boot.
+    mrpt::random::CRandomGenerator rng(seed32(hashKey({seed_, detail::kTagChainDelay, rx})));
+    return rng.drawGaussian1D(0.0, spec_.chainDelaySigma_s);
 }
 
 uint8_t HardwareModel::jumpState(unsigned rx, double t_s) const
@@ -174,6 +194,12 @@ void HardwareModel::writeJson(
         o << "\n" << pad << "      ]\n" << pad << "    }";
     }
     o << "\n" << pad << "  ],\n";
+    o << pad << "  \"chain_delay_s\": [";
+    for (unsigned rx = 0; rx < nRx_; ++rx) o << (rx ? ", " : "") << chainDelay_s(rx);
+    o << "],\n";
+    o << pad << "  \"chain_phase_reference\": \""
+      << (spec_.chainPhaseReference ? spec_.chainPhaseReference->asString() : std::string())
+      << "\",\n";
     o << pad << "  \"jump_step_s\": " << spec_.jumpStep_s << ",\n";
     o << pad << "  \"jump_baseband\": " << (spec_.jumpBaseband ? "true" : "false") << ",\n";
     o << pad << "  \"jump_state_delay_s\": [";

@@ -308,6 +308,9 @@ struct Reader
              "antenna_gain_sigma_db",
              "ripple_deg",
              "ripple_components",
+             "chain_delay_sigma_ns",
+             "chain_delays_ns",
+             "chain_phase_reference",
              "tx_chain_phase_offsets",
              "tx_chain_gain_sigma_db",
              "cyclic_shift_delays",
@@ -333,6 +336,24 @@ struct Reader
         s.antennaGainSigma_dB = n.doubleOr("antenna_gain_sigma_db", s.antennaGainSigma_dB);
         s.rippleAmplitude_rad = n.doubleOr("ripple_deg", s.rippleAmplitude_rad / kDeg) * kDeg;
         s.rippleComponents = n.unsignedOr("ripple_components", s.rippleComponents, 16);
+        s.chainDelaySigma_s = n.doubleOr("chain_delay_sigma_ns", s.chainDelaySigma_s * 1e9) * 1e-9;
+        if (auto d = n.get("chain_delays_ns"))
+        {
+            if (d->size() < 1 || d->size() > 8) d->fail("expected a list of 1 to 8 delays [ns]");
+            for (size_t i = 0; i < d->size(); ++i)
+                s.chainDelays_s.push_back(d->at(i).asDouble() * 1e-9);
+        }
+        if (auto r = n.get("chain_phase_reference"))
+        {
+            try
+            {
+                s.chainPhaseReference = Chanspec::fromString(r->asString());
+            }
+            catch (const std::invalid_argument& e)
+            {
+                r->fail(e.what());
+            }
+        }
         s.txChainPhaseOffsets = n.boolOr("tx_chain_phase_offsets", s.txChainPhaseOffsets);
         s.txChainGainSigma_dB = n.doubleOr("tx_chain_gain_sigma_db", s.txChainGainSigma_dB);
         s.cyclicShiftDelays = n.boolOr("cyclic_shift_delays", s.cyclicShiftDelays);
@@ -433,6 +454,10 @@ struct Reader
         if (auto m = r.get("motion")) sc.motion = motion(*m);
         if (auto o = r.get("odometry")) sc.odometry = odometry(*o);
         if (auto imp = r.get("impairments")) sc.impairments = impairments(*imp);
+        // The chains' offsets are those drawn for the first transmitter's channel there (as
+        // before delays were modelled) and follow the delays elsewhere.
+        if (!sc.impairments.chainPhaseReference && !sc.transmitters.empty())
+            sc.impairments.chainPhaseReference = sc.transmitters.front().chanspec;
         if (auto p = r.get("propagation"))
         {
             p->allowOnly({"max_reflection_order", "min_path_gain_db"});

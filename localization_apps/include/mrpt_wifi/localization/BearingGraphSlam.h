@@ -8,11 +8,21 @@
 
 #include <array>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace mrpt_wifi::localization
 {
+/** One phase of solveBearingGraph (placement search, AP initialisation, a Ceres solve, ...):
+ *  its wall time summed over every time it ran and how often it ran. */
+struct GraphSlamPhase
+{
+    std::string name;
+    double seconds = 0;
+    size_t runs = 0;
+};
+
 struct GraphSlamOptions
 {
     double nodePeriod_s = 0.5;  //!< a pose node every this much odometry time
@@ -46,13 +56,18 @@ struct GraphSlamOptions
 
     /** Known APs: stay fixed and define the world frame. The trajectory's initial placement
      *  is multi-hypothesis: the `placementHypotheses` best distinct placements of a global
-     *  search over the first 30 s, and (alignEstimatedAps) the estimated-AP solution moved onto
-     *  the map by the rigid transform aligning its APs with the known ones; each is optimised
-     *  and the lowest final cost wins (symmetric AP layouts and the mirror ambiguity of linear
-     *  arrays make several placements look alike at the start).
+     *  search over the first 30 s, each optimised, the lowest final cost wins (symmetric AP
+     *  layouts and the mirror ambiguity of linear arrays make several placements look alike at
+     *  the start). Only when the placement cannot be trusted (the first 30 s hear fewer than 3
+     *  of the APs, or the best placed solution leaves fewer than `placementInlierShare` of the
+     *  bearings within 3 σ or did not converge) is (alignEstimatedAps) the estimated-AP
+     *  solution, moved onto the map by the rigid transform aligning its APs with the known
+     *  ones, optimised as a further start: the unknown-AP machinery costs more than everything
+     *  else and is not needed when the placement is clear.
      *  Unknown: APs are estimated, gauge = first pose fixed. */
     bool apsKnown = false;
     int placementHypotheses = 4;
+    double placementInlierShare = 0.6;
     /** Unknown APs: compute each AP's position covariance from the joint solution
      *  (ceres::Covariance; the trajectory's uncertainty is marginalised, gauge = first pose). */
     bool apCovariance = false;
@@ -68,8 +83,27 @@ struct GraphSlamOptions
     /** Ceres iterations of each solve; a solve that stops before Ceres' convergence criteria
      *  hold sets GraphSlamResult::converged = false (the apps warn). */
     int maxIterations = 500;
+    /** Unknown APs with the grown start also run: Ceres iterations of the start from APs
+     *  triangulated on the whole odometry. On a long drifting drive that start lies far from
+     *  any solution and would spend hundreds of iterations of the whole problem (30 min in a
+     *  building: 228, 27 s) to end above the grown start; a start still moving after this many
+     *  competes with the cost it has reached (reported as not converged if it wins). */
+    int odometryStartIterations = 50;
     int threads = 2;
     bool verbose = false;
+    /** Grown start: the stages before the last free only the poses of their newest 4 windows
+     *  (the older ones stay as solved) and, with unknown APs, keep of the older bearings one per
+     *  AP and cell of this size [m] of the solved poses (they hold the APs), so a stage costs
+     *  what a few windows and the area hold, not the whole drive so far; the last stage and the
+     *  other starts use every bearing. 0: no older bearing is kept. */
+    double growthThinning_m = 1.0;
+    /** Called with one line per finished phase (placement, AP initialisation, each solve,
+     *  grown-start windows at most every few seconds), with the elapsed time: what the
+     *  programs print while a long drive is solved. Empty: silent. */
+    std::function<void(const std::string&)> progress;
+    /** Called each time a phase ends, with that run's name and seconds (runs = 1): for
+     *  measurements per phase, e.g. the peak memory of each (bench_graph_slam_scale). */
+    std::function<void(const GraphSlamPhase&)> phaseFinished;
 };
 
 /** The problem: odometry (trajectory in its own frame) or an existing MRPT pose graph with node
@@ -118,6 +152,11 @@ struct GraphSlamResult
     /** With GraphSlamOptions::odoScaleStd / odoYawDriftStd_radPerM: the estimated odometry
      *  scale factor and heading drift [rad/m]. */
     double odometryScale = 1, odometryYawDrift_radPerM = 0;
+    /** Where the time went, in the order the phases first ran (summed over every start). */
+    std::vector<GraphSlamPhase> phases;
+    /** How many times an unknown AP was initialised from its rays (triangulateDevice): 0 when
+     *  the APs are known and their placement is clear. */
+    size_t apTriangulations = 0;
 };
 
 /** Builds and solves the graph (Ceres). Throws std::runtime_error on an empty odometry, no usable

@@ -191,6 +191,10 @@ public:
 
     /** What the folder holds for a device (file names), for messages. */
     std::vector<std::string> available(const std::string& device) const;
+    /** For a channel find() has nothing for: which channel, what the store holds, and the
+     *  wifi-calibrate run that writes the missing file (a drive among known access points with
+     *  frames on that channel). */
+    std::string missingChannelAdvice(const std::string& device, const Chanspec& cs) const;
 
 private:
     std::string path_, dir_;

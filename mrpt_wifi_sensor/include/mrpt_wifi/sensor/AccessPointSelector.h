@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mrpt_wifi
 {
@@ -44,5 +45,11 @@ private:
     double lockTime_s_ = 0;
     unsigned missingScans_ = 0;
 };
+
+/** `channel_schedule = scan`: the distinct channels of the access points in a scan that pass
+ *  the band, SSID and RSSI limits of `options`, ordered by channel number (a stable visiting
+ *  order from one scan to the next). */
+std::vector<Chanspec> channelsFromScan(
+    const CObservationWiFiScan& scan, const AccessPointSelectorOptions& options);
 
 }  // namespace mrpt_wifi

@@ -14,6 +14,7 @@
 #include <condition_variable>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -73,6 +74,22 @@ public:
         uint64_t controlErrors = 0;
         uint64_t chainStateChanges = 0;  //!< receive-chain jump-state changes (all channels)
         uint64_t chainsWithJumps = 0;    //!< chains seen in more than one state
+        /** What hopping among `channel_schedule` costs, per channel visited. */
+        struct ChannelUse
+        {
+            Chanspec chanspec;
+            uint64_t visits = 0;         //!< switches to this channel (and the first set-up)
+            uint64_t frames = 0;         //!< frames delivered on it
+            double time_s = 0;           //!< from each switch request to the next one
+            double downtime_s = 0;       //!< from each switch request to its first frame
+            uint64_t measured = 0;       //!< visits whose first frame came (downtime known)
+            uint64_t withoutFrames = 0;  //!< visits that ended without any frame
+            /** Frames the downtime cost, at the rate the channel delivered otherwise. */
+            double framesLostEstimate() const;
+        };
+        std::map<uint32_t, ChannelUse> channels;  //!< key: centre << 16 | bandwidth
+        uint64_t scheduleSwitches = 0;            //!< switches made by channel_schedule
+        double maxSwitchDowntime_s = 0;
         CsiFrameAssemblerStats assembler;
         /** The first few addresses whose datagrams router_address dropped (what to set it to). */
         std::vector<std::string> otherSourceAddresses;
@@ -101,6 +118,12 @@ public:
     std::optional<Chanspec> configuredChannel() const;
     /** Downtime of the last completed channel switch [s]. */
     std::optional<double> lastSwitchDowntime() const;
+    /** One line on what hopping among channels cost so far (empty without channel_schedule):
+     *  switches, time without CSI per switch, frames lost, frames per channel. Logged with the
+     *  status and when the sensor closes. */
+    std::string channelScheduleSummary() const;
+    /** The channels currently visited in turn (the given list, or the latest scan's). */
+    std::vector<Chanspec> channelSchedule() const;
     /** The live bearing estimation (`bearing_algorithm`), or nullptr when it is off or before
      *  initialize(). */
     LiveBearingWorker* bearingWorker() { return bearings_.get(); }
@@ -152,6 +175,17 @@ private:
     std::optional<double> lastSwitchDowntime_;
     std::unique_ptr<AccessPointSelector> selector_;
     mrpt::Clock::time_point lastScan_, lastStatus_;
+
+    // Channel schedule (channel_schedule): one switch in flight at a time; a channel's dwell
+    // starts when the router confirms the switch.
+    std::vector<Chanspec> schedule_;
+    bool hopInFlight_ = false;
+    mrpt::Clock::time_point dwellStart_, visitStart_;
+    std::optional<Chanspec> visiting_;  //!< the channel the current visit's time goes to
+    bool visitIsSwitch_ = false;        //!< false for the start-up configuration
+    void onChannelConfigured(const Chanspec& cs);
+    void advanceSchedule(mrpt::Clock::time_point now);
+    void startVisit(const Chanspec& cs, mrpt::Clock::time_point t);  //!< under mutex_
 
     // Live bearings (bearing_* keys): frames go through the worker, which returns them in order
     // followed by their bearing observations.

@@ -67,6 +67,14 @@ struct CsiSensorSettings
     bool autoMacFilter = true;
     AccessPointSelectorOptions selector;
 
+    /** `channel_schedule`: channels visited in turn, `channel_dwell_s` each (empty: one
+     *  channel). `scheduleFromScan` (`channel_schedule = scan`): the channels of the access
+     *  points of the latest scan instead of a fixed list. */
+    std::vector<Chanspec> channelSchedule;
+    bool scheduleFromScan = false;
+    double channelDwell_s = 2.0;
+    bool hopping() const { return scheduleFromScan || !channelSchedule.empty(); }
+
     LiveBearingSettings bearing;  //!< `bearing_*`: bearings next to the capture (off: empty)
 
     /** Files named by the section (pcap_file, bearing_*) are resolved on loading

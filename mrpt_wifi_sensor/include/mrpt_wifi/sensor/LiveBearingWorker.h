@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -121,6 +122,8 @@ private:
     std::unique_ptr<bearing::BearingProcessor> processor_;
     LiveBearingSettings settings_;
     std::optional<uint32_t> lastChannel_;  //!< worker thread only
+    /** Channels whose calibration was reported (a channel schedule comes back to each). */
+    std::set<uint32_t> reportedChannels_;
 
     mutable std::mutex mutex_;
     std::condition_variable wake_, idle_;

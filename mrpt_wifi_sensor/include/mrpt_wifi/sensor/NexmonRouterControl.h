@@ -61,8 +61,14 @@ public:
     /** Throws std::invalid_argument if `options` fail RouterSetupOptions::validate(). */
     NexmonRouterControl(std::shared_ptr<RouterShell> shell, RouterSetupOptions options);
 
-    /** Once per router boot: reload the patched driver and bridge the 5 GHz interface. */
-    void loadFirmwareModule();
+    /** Once per router boot: reload the patched driver and bridge the 5 GHz interface (and
+     *  the 2.4 GHz one with `bridge2G4`: a channel schedule that visits both bands), so the
+     *  CSI datagrams reach the LAN. */
+    void loadFirmwareModule(bool bridge2G4 = false);
+    /** Stops CSI extraction on the radio of `cs`'s band (`makecsiparams -e 0`): a channel
+     *  schedule leaving one band for the other, so only the visited channel is captured. */
+    void stopCapture(const Chanspec& cs);
+    std::string stopCaptureCommand(const Chanspec& cs) const;
     /** Tunes the radio and (re)starts CSI extraction. Throws RouterError. */
     void configure(const CsiExtractionSettings& s);
     /** Current chanspec of the interface of `band`, as the router reports it. */

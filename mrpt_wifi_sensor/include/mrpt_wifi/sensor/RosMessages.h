@@ -65,6 +65,10 @@ struct MessageType
 };
 const MessageType& wifiType();
 const MessageType& bearingType();
+/** The rf_msgs field lines (Wifi.msg, Bearing.msg without comments; nested types spelled as ROS
+ *  1 does, "std_msgs/Header header"). The ROS 2 package has the same fields (Ros2Messages.h). */
+const char* wifiFieldLines();
+const char* bearingFieldLines();
 /** ROS 1's MD5 of a message definition body (field lines; nested types already as their MD5s
  *  where given in `nested`, a map from type name to MD5). Exposed for tests. */
 std::string messageMd5(

@@ -54,6 +54,10 @@ public:
     /** e^{j φ_i(k)} · 10^{g_i/20} for all NFFT bins of a channel, [rx][bin]. */
     const std::vector<std::complex<float>>& chainFactors(const Chanspec& cs) const;
 
+    /** Delay τ of chain `rx` [s] that moves its phase offset between channels
+     *  (ImpairmentSpec::chainPhaseReference). */
+    double chainDelay_s(unsigned rx) const;
+
     /** Jump state of chain `rx` at time t (0 for chain 0 and when jumps are disabled). */
     uint8_t jumpState(unsigned rx, double t_s) const;
     double jumpDelay_s(unsigned rx, double t_s) const;

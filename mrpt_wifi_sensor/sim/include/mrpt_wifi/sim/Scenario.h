@@ -166,6 +166,15 @@ struct ImpairmentSpec
     double antennaGainSigma_dB = 0.5;   //!< per chain gain mismatch
     double rippleAmplitude_rad = 0.08;  //!< RMS of the smooth per-subcarrier phase ripple
     unsigned rippleComponents = 3;      //!< cosine terms across the band
+    /** The chains' phase offsets follow their delays from channel to channel: on channel c
+     *  chain i's offset is φ_i − 2π·(f_c − f_ref)·τ_i, φ_i the (uniform) offset on the
+     *  reference channel, τ_i the chain's delay (cables, filters; fixed per device, every
+     *  boot), N(0, `chain_delay_sigma_ns`) unless listed (`chain_delays_ns`). Unset reference
+     *  (`chain_phase_reference`; the first transmitter's channel by default): offsets drawn
+     *  anew on every channel. The in-band slope of τ is left to the ripple. */
+    std::optional<Chanspec> chainPhaseReference;
+    double chainDelaySigma_s = 1e-9;
+    std::vector<double> chainDelays_s;  //!< per chain; empty: drawn
 
     // Fixed per transmitter, per boot of that transmitter, per channel, per transmit chain
     // (multi-stream transmitters only): what transmit-chain calibration must recover, and
