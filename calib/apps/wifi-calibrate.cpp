@@ -832,6 +832,10 @@ int main(int argc, char** argv)
                     std::cout << "  chain states     : " << d.chainStateChanges << " changes, "
                               << d.unknownStateFrames
                               << " frames left out (a chain's state not measurable or too rare)\n";
+                    if (d.mergedChainStates > 0)
+                        std::cout << "    " << d.mergedChainStates
+                                  << " more within 3/4 of a jump of their chain's reference "
+                                     "(delay and phase): multipath, merged into it\n";
                     for (const auto& st : d.chainStates)
                         std::cout << "    chain " << st.antenna << " state " << int(st.state)
                                   << ": " << std::setw(6) << st.frames << " frames, delay "

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -125,6 +126,18 @@ ChainStatePolicy chainStatePolicyFromString(const std::string& s, const std::str
 std::string applyChainStatePolicy(PhaseCalibration& c, ChainStatePolicy policy, double maxPhase_rad)
 {
     if (c.chainStates.empty() || policy == ChainStatePolicy::Always) return {};
+    const bool onlyReferences = std::all_of(
+        c.chainStates.begin(), c.chainStates.end(),
+        [](const ChainStateCalibration& st)
+        { return st.deltaDelay_s == 0 && st.deltaPhase_rad == 0; });
+    if (policy == ChainStatePolicy::Auto && onlyReferences)
+    {
+        // No chain jumped during the drive: the file is one without states, each chain's delay
+        // kept in its phases (a table of reference states would only make the bearing chain
+        // match over-the-air delays, biased by multipath, to the drive's).
+        c.chainStates.clear();
+        return "no chain changed state during the drive: no state table written";
+    }
     double largest = 0;
     for (const auto& st : c.chainStates) largest = std::max(largest, std::abs(st.deltaPhase_rad));
     std::ostringstream o;
@@ -556,6 +569,32 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
         }
         states[key] = sd;
     }
+    // A moving robot's multipath shifts a chain's measured delay by 1–2 ns at 80 MHz for a
+    // stretch of frames, and the tracker opens a "state" for it; a jump is a step of a quarter
+    // sample (3.1 ns at 80 MHz, 12.5 ns at 20 MHz; 3.0–3.3 ns and 11.9–13.1 ns measured). A
+    // state less than three quarters of a step from its chain's reference, with the
+    // reference's phase, is the reference itself: its frames join it, and the file keeps the
+    // chain's delay.
+    const double sameStateDelay_s =
+        0.75 * 3.125e-9 * chainStateDelayScale(bandwidthOfSubcarriers(ch.layout->subcarriers));
+    std::set<std::pair<unsigned, uint8_t>> merged;
+    for (auto it = states.begin(); it != states.end();)
+    {
+        const auto& sd = it->second;
+        const auto ref = states.find({sd.antenna, referenceState[sd.antenna]});
+        if (sd.reference || ref == states.end() || std::abs(sd.deltaDelay_s) >= sameStateDelay_s ||
+            std::abs(sd.deltaPhase_rad) >= kSameStatePhase_rad)
+        {
+            ++it;
+            continue;
+        }
+        auto& r = ref->second;
+        r.delay_s = (r.delay_s * double(r.frames) + sd.delay_s * double(sd.frames)) /
+                    double(r.frames + sd.frames);
+        r.frames += sd.frames;
+        merged.insert(it->first);
+        it = states.erase(it);
+    }
     std::vector<Segment> segments;
     for (const auto& s : ch.segments)
     {
@@ -563,7 +602,8 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
         // frames are left out rather than calibrated on their own.
         bool known = true;
         for (unsigned i = 1; i < s.chainState.size(); ++i)
-            known = known && states.count({i, s.chainState[i]});
+            known =
+                known && (states.count({i, s.chainState[i]}) || merged.count({i, s.chainState[i]}));
         if (known) segments.push_back(s);
     }
     if (!states.empty())
@@ -587,6 +627,7 @@ ChannelCalibration PhaseCalibrator::solve(const Chanspec& cs) const
     for (const auto& [key, sd] : states) d.chainStates.push_back(sd);
     d.chainStateChanges = ch.stateChanges;
     d.unknownStateFrames = ch.unknownStateFrames;
+    d.mergedChainStates = merged.size();
 
     d.frames = ch.frames;
     d.snapshots = ch.snapshots;

@@ -237,15 +237,6 @@ private:
     std::atomic<uint64_t> written_{0};
 };
 
-/** Percentile of a copy. */
-double percentile(std::vector<double> v, double q)
-{
-    if (v.empty()) return NAN;
-    const size_t k = std::min(v.size() - 1, size_t(q * double(v.size())));
-    std::nth_element(v.begin(), v.begin() + long(k), v.end());
-    return v[k];
-}
-
 /** The live window: AP map, particles, estimate, bearing rays of the last second, the latest
  *  bearing–delay profile (when the fallback chain keeps one). */
 class LiveView
@@ -775,7 +766,13 @@ int main(int argc, char** argv)
                 if (!ini.read_string(s->section, "bearing_algorithm", "").empty())
                     sensorBearingLabels.insert(s->sensor->getSensorLabel());
             std::deque<CObservationWiFiBearing::Ptr> recent;  // last second, for the view
-            std::vector<double> lags;                         // per pose output [s]
+            // Nothing is kept per pose for the whole run (a live run may last days): the lags
+            // as a histogram, the estimates outside the map's area as a count. Only scoring
+            // against a ground truth (-g) keeps every estimate, for the end.
+            LagRecord lags;  // per pose output [s]
+            double lastLag_s = NAN, lastPoseTime = NAN;
+            uint64_t outsideArea = 0;
+            const bool keepEstimates = argGt.isSet();
             Trajectory2D est;
             std::vector<std::array<double, 3>> estCov;  // position covariance per pose [m²]
             uint64_t nCsi = 0, nOdo = 0, nBearings = 0, nOther = 0, nFallback = 0;
@@ -806,16 +803,19 @@ int main(int argc, char** argv)
                 // TUM readers expect.
                 if (std::llround(t * 1e6) <= lastOutputStamp_us) return true;
                 lastOutputStamp_us = std::llround(t * 1e6);
-                lags.push_back(nowUnix() - t);
+                lastLag_s = nowUnix() - t;
+                lags.add(lastLag_s);
+                lastPoseTime = t;
+                if (loc.wifiMap().area() && !loc.wifiMap().inArea(m.x, m.y)) ++outsideArea;
                 ++poseOutputs;
                 ++secPoses;
-                est.push_back(t, m);
+                if (keepEstimates) est.push_back(t, m);
                 const auto u = loc.uncertainty();
                 // Flushed per line: a reader follows the estimate as it is made.
                 tum << Trajectory2D::tumLine(t, m) << std::flush;
                 pfTum << Trajectory2D::tumLine(t, u.particlesMean) << std::flush;
                 const auto& c = u.reported;
-                estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
+                if (keepEstimates) estCov.push_back({c(0, 0), c(0, 1), c(1, 1)});
                 covCsv << fmt(t, 6) << "," << fmt(m.x, 4) << "," << fmt(m.y, 4) << ","
                        << fmt(mrpt::RAD2DEG(m.phi), 3) << "," << covarianceCsvCells(c) << ","
                        << covarianceCsvCells(u.particles) << std::endl;
@@ -848,6 +848,9 @@ int main(int argc, char** argv)
             uint64_t nMapped = 0;     // bearings the filter weighs or the device map uses
             uint64_t nUnweighed = 0;  // from the map's transmitters, without an angle it weighs
             std::set<std::string> unmappedHeard, channelsSeen;
+            // CSI frames per transmitter, for the summary (bounded: a busy street has many).
+            constexpr size_t kMaxSendersCounted = 64;
+            std::map<MacAddress, uint64_t> csiPerSender;
             std::map<std::string, uint64_t> fallbackRejects;  // why our chain gave no bearing
             const auto& weighs = loc.wifiMap().likelihoodOptions;
             const auto noteMapped = [&](const CObservationWiFiBearing& b)
@@ -1102,6 +1105,9 @@ int main(int argc, char** argv)
                     {
                         ++nCsi;
                         if (channelsSeen.size() < 4) channelsSeen.insert(csi->chanspec.asString());
+                        if (csiPerSender.size() < kMaxSendersCounted ||
+                            csiPerSender.count(csi->transmitter))
+                            ++csiPerSender[csi->transmitter];
                         // The view shows a bearing-delay profile twice a second: only then
                         // does the estimator keep one (it costs more than the bearing).
                         bool keep = false;
@@ -1157,7 +1163,7 @@ int main(int argc, char** argv)
                         fmt(double(secBearings) / std::max(sinceStatus, 1e-3), 0) +
                         " poses/s=" + fmt(double(secPoses) / std::max(sinceStatus, 1e-3), 1) +
                         " lag=" +
-                        (lags.empty() ? std::string("-") : fmt(lags.back() * 1e3, 0) + "ms") +
+                        (lags.count() == 0 ? std::string("-") : fmt(lastLag_s * 1e3, 0) + "ms") +
                         (loc.hasOdometry() ? "" : " (no odometry)");
                 }
                 if (mapper.enabled() &&
@@ -1200,8 +1206,8 @@ int main(int argc, char** argv)
             }
             if (mcapOut)
             {
-                if (mapper.enabled() && est.size() > 0)
-                    mcapOut->devices(est.t.back(), mcap_output::devicesOf(liveDevices));
+                if (mapper.enabled() && poseOutputs > 0)
+                    mcapOut->devices(lastPoseTime, mcap_output::devicesOf(liveDevices));
                 mcapOut->close();
             }
             if (view && !argShot.getValue().empty())
@@ -1228,6 +1234,14 @@ int main(int argc, char** argv)
                         : std::to_string(sensorBearingLabels.size()) + " sensor(s)")
                 << " with own bearings), " << nOther << " other\n"
                 << "  first obs. at  : " << fmt(firstObsTime, 6) << " (UNIX time, sensor clock)\n";
+            if (!csiPerSender.empty())
+            {
+                sum << "  CSI per sender :";
+                for (const auto& [mac, n] : csiPerSender) sum << " " << mac.asString() << " " << n;
+                if (csiPerSender.size() == kMaxSendersCounted)
+                    sum << " (the first " << kMaxSendersCounted << " senders heard)";
+                sum << "\n";
+            }
             // What a chain's windows combined, given the odometry or not (as in csi-bearings).
             const auto windows = [](bool odometry)
             {
@@ -1260,9 +1274,9 @@ int main(int argc, char** argv)
                 << ")\n"
                 << "  pose outputs   : " << poseOutputs << " ("
                 << fmt(double(poseOutputs) / active, 1) << " /s while data flowed)\n"
-                << "  lag [ms]       : p50 " << fmt(percentile(lags, 0.5) * 1e3, 1) << ", p99 "
-                << fmt(percentile(lags, 0.99) * 1e3, 1) << ", max "
-                << fmt(percentile(lags, 1.0) * 1e3, 1)
+                << "  lag [ms]       : p50 " << fmt(lags.percentile(0.5) * 1e3, 1) << ", p99 "
+                << fmt(lags.percentile(0.99) * 1e3, 1) << ", max "
+                << fmt(lags.percentile(1.0) * 1e3, 1)
                 << " (pose output time - timestamp of the newest bearing in it)\n"
                 << "  odometry       : "
                 << (loc.hasOdometry()
@@ -1281,8 +1295,11 @@ int main(int argc, char** argv)
                             : " (without_odometry = false: it needs odometry)")
                     << ", " << fmt(loc.smoother().solveTime_s(), 2) << " s";
             sum << "\n";
-            if (const auto area = areaSummary(loc.wifiMap(), est.poses); !area.empty())
-                sum << "  area           : " << area << "\n";
+            // areaSummary()'s line, from the count kept while running.
+            if (const auto& a = loc.wifiMap().area())
+                sum << "  area           : x " << fmt(a->min.x) << ".." << fmt(a->max.x) << " y "
+                    << fmt(a->min.y) << ".." << fmt(a->max.y) << " m, " << outsideArea
+                    << " estimates outside it\n";
             if (argGt.isSet() && !est.empty())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -17,10 +17,12 @@
 #include <mrpt_wifi/obs/bearing/SyntheticAperture.h>
 #include <mrpt_wifi/sensor/CsiDecoder.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <unordered_map>
 
@@ -229,6 +231,7 @@ int main(int argc, char** argv)
                 std::vector<sar::PairedProduct> products;
                 std::vector<sar::Exchange> exchanges;  // the products placed on the trajectory
                 size_t pairs = 0;
+                double carrier_Hz = 0;  // the channel of the exchanges used
             };
             std::vector<Peer> peers;
             for (const auto& spec : argTx.getValue())
@@ -266,8 +269,24 @@ int main(int argc, char** argv)
                             std::to_string(best) + " vs " + std::to_string(second) +
                             "); name it as FILE@MAC");
                 }
+                // A robot that hops channels hears a peer on several carriers, and an aperture
+                // is coherent on one: the channel with the most frames from the peer is used.
+                std::map<double, std::vector<CObservationWiFiCSI::Ptr>> byCarrier;
+                for (const auto& f : bySender[peer.mac])
+                    byCarrier[f->chanspec.centerFrequencyHz()].push_back(f);
+                const auto most = std::max_element(
+                    byCarrier.begin(), byCarrier.end(),
+                    [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
+                peer.carrier_Hz = most->first;
+                if (byCarrier.size() > 1 && !quiet)
+                {
+                    std::cout << peer.mac.asString() << ": heard on " << byCarrier.size()
+                              << " channels; using " << most->second.front()->chanspec.asString()
+                              << " (" << most->second.size() << " of " << bySender[peer.mac].size()
+                              << " frames)\n";
+                }
                 peer.products = sar::pairedProducts(
-                    bySender[peer.mac], txFrames, argRxChain.getValue(), argPeerChain.getValue(),
+                    most->second, txFrames, argRxChain.getValue(), argPeerChain.getValue(),
                     &peer.pairs);
                 peers.push_back(std::move(peer));
             }
@@ -296,8 +315,6 @@ int main(int argc, char** argv)
             }
 
             sar::SarOptions options;
-            // The channel the frames say (a rawlog's), else --channel's (.dat records have none).
-            options.carrier_Hz = rxFrames.front()->chanspec.centerFrequencyHz();
             options.positionStd_m = argPositionStd.getValue();
             // A search for the offset that maximises the peers' coherence was tried: on the
             // development recordings coherence hardly changes with the offset (the bearing
@@ -350,6 +367,9 @@ int main(int argc, char** argv)
             for (const auto& peer : peers)
             {
                 std::string whyNot;
+                // The channel the frames say (a rawlog's), else --channel's (.dat records have
+                // none).
+                options.carrier_Hz = peer.carrier_Hz;
                 const auto est = sar::estimateBearing(peer.exchanges, options, whyNot);
                 if (!est)
                 {

@@ -359,6 +359,26 @@ double LiveLocalizer::spread_m() const
     return std::sqrt(std::max(cov(0, 0), cov(1, 1)));
 }
 
+void LagRecord::add(double lag_s)
+{
+    ++counts_[std::llround(lag_s / kResolution_s)];
+    ++count_;
+}
+
+double LagRecord::percentile(double q) const
+{
+    if (count_ == 0) return NAN;
+    const uint64_t rank =
+        std::min(count_ - 1, uint64_t(std::max(0.0, q) * double(count_)));  // 0-based
+    uint64_t below = 0;
+    for (const auto& [bin, n] : counts_)
+    {
+        below += n;
+        if (below > rank) return double(bin) * kResolution_s;
+    }
+    return double(counts_.rbegin()->first) * kResolution_s;
+}
+
 LiveDeviceMapper::LiveDeviceMapper(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
     requireIniBools(c, s, {"map_devices"});

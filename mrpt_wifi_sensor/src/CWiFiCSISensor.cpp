@@ -208,6 +208,7 @@ void CWiFiCSISensor::initialize()
     // A schedule with 2.4 GHz channels (or one starting there) needs that radio bridged too.
     bool bridge2G4 = extraction.chanspec.band == WifiBand::Band2G4;
     for (const auto& cs : s.channelSchedule) bridge2G4 |= cs.band == WifiBand::Band2G4;
+    bridge2G4 |= s.scheduleFromScan;  // the scans may find 2.4 GHz channels
     switchTarget_ = extraction.chanspec;
     switchRequested_ = mrpt::Clock::now();
     if (s.hopping())
@@ -221,8 +222,8 @@ void CWiFiCSISensor::initialize()
         for (const auto& cs : schedule_) list += " " + cs.asString();
         MRPT_LOG_INFO_STREAM(
             "[" << m_sensorLabel << "] channel schedule:"
-                << (s.scheduleFromScan ? std::string(" from the scans (band of ") +
-                                             extraction.chanspec.asString() + ")"
+                << (s.scheduleFromScan ? std::string(" from the scans of both bands (") +
+                                             extraction.chanspec.asString() + "'s first)"
                                        : list)
                 << ", " << s.channelDwell_s << " s on each");
     }
@@ -550,19 +551,35 @@ void CWiFiCSISensor::requestScan()
         scanQueued_ = true;
     }
     const auto band = settings_->extraction.chanspec.band;
-    const std::string scanner =
-        host ? "host:" + settings_->scanInterface : "router:" + router_->interfaceFor(band);
+    // A schedule from the scans visits both bands, as a building's APs spread over them: each
+    // radio scans its own band. Otherwise only the band being captured matters.
+    std::vector<WifiBand> bands{band};
+    if (settings_->scheduleFromScan) bands = {WifiBand::Band5G, WifiBand::Band2G4};
+    std::string scanner = host ? "host:" + settings_->scanInterface : "router:";
+    if (!host)
+        for (size_t i = 0; i < bands.size(); ++i)
+            scanner += (i ? "+" : "") + router_->interfaceFor(bands[i]);
     postJob(
-        [this, band, host, scanner]
+        [this, bands, host, scanner]
         {
-            auto aps = host ? scanWithHostInterface(
-                                  settings_->scanInterface, settings_->setup.commandTimeout_s)
-                            : router_->scan(band);
-            // Keep the band being captured (the host card also hears the other band).
+            std::vector<ScannedAccessPoint> aps;
+            if (host)
+                aps = scanWithHostInterface(
+                    settings_->scanInterface, settings_->setup.commandTimeout_s);
+            else
+                for (const auto b : bands)
+                {
+                    auto heard = router_->scan(b);
+                    aps.insert(aps.end(), heard.begin(), heard.end());
+                }
+            // Keep the bands asked for (the host card hears both).
             aps.erase(
                 std::remove_if(
                     aps.begin(), aps.end(),
-                    [&](const ScannedAccessPoint& ap) { return ap.chanspec.band != band; }),
+                    [&](const ScannedAccessPoint& ap) {
+                        return std::find(bands.begin(), bands.end(), ap.chanspec.band) ==
+                               bands.end();
+                    }),
                 aps.end());
             postEvent(
                 [this, aps = std::move(aps), scanner]
@@ -571,8 +588,7 @@ void CWiFiCSISensor::requestScan()
                     scan->timestamp = mrpt::Clock::now();
                     scan->sensorLabel = m_sensorLabel + "_SCAN";
                     scan->sensorPose = settings_->assembler.sensorPose;
-                    scan->scanner =
-                        "router:" + router_->interfaceFor(settings_->extraction.chanspec.band);
+                    scan->scanner = scanner;
                     scan->accessPoints = aps;
                     {
                         std::lock_guard<std::mutex> lk(mutex_);
@@ -582,9 +598,14 @@ void CWiFiCSISensor::requestScan()
                     appendObservation(scan);
                     if (settings_->scheduleFromScan)
                     {
+                        // The capture's band first, then the other.
                         auto options = settings_->selector;
                         options.band = settings_->extraction.chanspec.band;
                         auto channels = channelsFromScan(*scan, options);
+                        options.band =
+                            options.band == WifiBand::Band5G ? WifiBand::Band2G4 : WifiBand::Band5G;
+                        for (const auto& cs : channelsFromScan(*scan, options))
+                            channels.push_back(cs);
                         const bool same = channels.size() == schedule_.size() &&
                                           std::equal(
                                               channels.begin(), channels.end(), schedule_.begin(),
@@ -813,6 +834,8 @@ void CWiFiCSISensor::startVisit(const Chanspec& cs, mrpt::Clock::time_point t)
         {
             left.downtime_s += stay_s;
             ++left.withoutFrames;
+            // The mean counts it, so does the max.
+            counters_.maxSwitchDowntime_s = std::max(counters_.maxSwitchDowntime_s, stay_s);
         }
     }
     visiting_ = cs;

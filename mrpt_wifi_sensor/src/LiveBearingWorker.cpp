@@ -214,6 +214,11 @@ void LiveBearingWorker::run()
             std::lock_guard<std::mutex> lk(mutex_);
             slot->done = true;
             --busy_;
+            // Taken by the status lines; without them (status_period = 0) only the newest
+            // are kept, or a long run would keep one per frame.
+            if (latencies_s_.size() >= kMaxLatencySamples)
+                latencies_s_.erase(
+                    latencies_s_.begin(), latencies_s_.begin() + long(kMaxLatencySamples / 2));
             latencies_s_.push_back(
                 std::chrono::duration<double>(mrpt::Clock::now() - slot->submitted).count());
         }

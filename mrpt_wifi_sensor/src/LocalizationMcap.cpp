@@ -42,7 +42,19 @@ uint16_t LocalizationMcap::channel(uint16_t& id, const char* topic, const Messag
 void LocalizationMcap::pose(
     double t, double x, double y, double phi, const std::array<double, 9>* cov3)
 {
-    trajectory_.push_back({t, x, y, phi});
+    last_ = {t, x, y, phi};
+    if (posesSeen_++ % stride_ == 0)
+    {
+        trajectory_.push_back(last_);
+        if (trajectory_.size() > kMaxPathPoses)
+        {
+            // Keep poses 0, 2, 4, … (posesSeen_ multiples of the doubled stride).
+            size_t kept = 0;
+            for (size_t i = 0; i < trajectory_.size(); i += 2) trajectory_[kept++] = trajectory_[i];
+            trajectory_.resize(kept);
+            stride_ *= 2;
+        }
+    }
     if (withCovariance_)
     {
         PoseWithCovarianceStamped m;
@@ -159,6 +171,7 @@ void LocalizationMcap::close()
     closed_ = true;
     if (!trajectory_.empty())
     {
+        if (trajectory_.back().t != last_.t) trajectory_.push_back(last_);
         PathMsg path;
         const double tEnd = trajectory_.back().t;
         path.header = mapHeader(tEnd);

@@ -75,6 +75,18 @@ std::string wsrLocation()
 }
 constexpr const char* kWsrDrive = "2021-06-27_202550";
 
+/** The cells of a CSV file's first row after the header (none if it has no such row). */
+std::vector<std::string> firstCsvRow(const std::string& path)
+{
+    std::ifstream csv(path);
+    std::string line;
+    std::vector<std::string> cells;
+    if (!std::getline(csv, line) || !std::getline(csv, line)) return cells;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) cells.push_back(x);
+    return cells;
+}
+
 /** Simulated room 3: the robot stands 2 s, then drives for 7 s along `path` (s from 0 to 1;
  *  relative to a point 2.5 m and 2 m inside the room's lower-left corner), exchanging packets
  *  with the room's three access points. */
@@ -333,20 +345,14 @@ TEST(WifiSar, BehindAnObstacleThePhasesFindThePeer)
                                 " --csv " + tmp.file("out.csv");
         const auto [status, out] = runCommand(cmd);
         ASSERT_EQ(status, 0) << out;
-        std::ifstream csv(tmp.file("out.csv"));
-        std::string line;
-        std::getline(csv, line);
-        ASSERT_TRUE(std::getline(csv, line)) << out;
-        std::vector<std::string> f;
-        std::stringstream ss(line);
-        for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-        ASSERT_EQ(f.size(), 22u) << line;
+        const auto f = firstCsvRow(tmp.file("out.csv"));
+        ASSERT_EQ(f.size(), 22u) << out;
         const double err = std::stod(f[13]), sigma = std::stod(f[3]);
-        EXPECT_LT(std::abs(err), 3.0) << d.stamp << ": " << line;
-        EXPECT_LE(std::abs(err), 3 * sigma) << d.stamp << ": " << line;
+        EXPECT_LT(std::abs(err), 3.0) << d.stamp << ": " << out;
+        EXPECT_LE(std::abs(err), 3 * sigma) << d.stamp << ": " << out;
         // The direction's own σ never exceeds the one that also covers a wrong peak.
-        EXPECT_LE(std::stod(f[19]), sigma + 1e-3) << line;
-        EXPECT_GE(std::stoi(f[18]), 1) << line;  // strong peaks
+        EXPECT_LE(std::stod(f[19]), sigma + 1e-3) << out;
+        EXPECT_GE(std::stoi(f[18]), 1) << out;  // strong peaks
     }
 }
 
@@ -610,6 +616,64 @@ TEST(SyntheticAperture, CsiBearingsRunsItOnARawlogWithBothRecordingsAndOdometry)
         EXPECT_LT(std::abs(error), 3 * sigma) << peer.mac.asString();
         EXPECT_LT(std::abs(error), 6.0) << peer.mac.asString();
     }
+}
+
+TEST(WifiSar, APeerHeardOnTwoChannelsIsSolvedOnOne)
+{
+    // A robot that hops channels hears its peer on more than one: here every fourth frame of
+    // the quarter-circle drive is labelled 6/20 (2.4 GHz), the others 108/20, and the file
+    // starts with a 6/20 frame. An aperture is coherent on one carrier: the peer's bearing comes
+    // from its 108/20 frames with 108's wavelength, and the output says which channel it used.
+    const auto drive = room3Drive(
+        [](double s)
+        {
+            const double a = s * M_PI / 2;
+            return mrpt::math::TPoint2D(0.64 * std::cos(a), 0.64 * std::sin(a));
+        });
+    const auto& [peers, t0, moverAt, rec] = drive;
+    const auto& peer = peers.front();
+    test::TempDir tmp;
+    {
+        mrpt::io::CFileGZOutputStream f(tmp.file("peer.rawlog"));
+        auto ar = mrpt::serialization::archiveFrom(f);
+        for (const auto& c : rec.heardByPeer[0]) ar << *c;
+    }
+    size_t heard = 0;
+    {
+        mrpt::io::CFileGZOutputStream f(tmp.file("mover.rawlog"));
+        auto ar = mrpt::serialization::archiveFrom(f);
+        double nextOdometry = t0;
+        for (const auto& c : rec.heardByMover)
+        {
+            if (c->transmitter != peer.mac) continue;
+            for (; nextOdometry <= mrpt::Clock::toDouble(c->timestamp) + 0.1; nextOdometry += 0.02)
+            {
+                mrpt::obs::CObservationOdometry odo;
+                odo.timestamp = mrpt::Clock::fromDouble(nextOdometry);
+                const auto p = moverAt(nextOdometry);
+                odo.odometry = mrpt::poses::CPose2D(p.x, p.y, 0);
+                ar << odo;
+            }
+            auto frame = *c;
+            if (heard++ % 4 == 0) frame.chanspec = Chanspec::make(6, 20);
+            ar << frame;
+        }
+    }
+    std::ofstream(tmp.file("peers.yaml"))
+        << "transmitters:\n  - {name: peer, mac: '" << peer.mac.asString() << "', position: ["
+        << peer.position.x << ", " << peer.position.y << "]}\n";
+    const auto [status, out] = runCommand(
+        test::binDir() + "/wifi-sar --rx " + tmp.file("mover.rawlog") + " --tx " +
+        tmp.file("peer.rawlog") + "@" + peer.mac.asString() + " --trajectory " +
+        tmp.file("mover.rawlog") + " --truth " + tmp.file("peers.yaml") + " --csv " +
+        tmp.file("out.csv"));
+    ASSERT_EQ(status, 0) << out;
+    EXPECT_NE(out.find("heard on 2 channels; using 108/20"), std::string::npos) << out;
+    const auto f = firstCsvRow(tmp.file("out.csv"));
+    ASSERT_EQ(f.size(), 22u) << out;
+    const double err = std::stod(f[13]), sigma = std::stod(f[3]);
+    EXPECT_LT(std::abs(err), 6.0) << out;
+    EXPECT_LE(std::abs(err), 3 * sigma) << out;
 }
 
 TEST(SyntheticAperture, RegisteredEstimatorOnARealRecording)

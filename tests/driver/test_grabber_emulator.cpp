@@ -8,8 +8,10 @@
 #include <mrpt_wifi/obs/CObservationWiFiScan.h>
 #include <mrpt_wifi/sensor/CsiFileReader.h>
 
+#include <filesystem>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "EmulatorProcess.h"
@@ -298,28 +300,85 @@ TEST(GrabberEmulator, PcapSourceReplaysACaptureAtItsRecordedPace)
     EXPECT_GT(t1 - t0, 0.02);
 }
 
+/** share/scenarios/hopping.yaml (one AP on each of 42/80, 155/80 and 6/20) on the emulator
+ *  with `emulatorArgs`, its router behind a loopback sshd, recorded by rawlog-grabber for
+ *  `seconds` with csi_channel_schedule.ini and `keys`. */
+struct HoppingRecording
+{
+    test::TempDir tmp;
+    uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
+    test::EmulatorProcess emu;
+    test::SshdFixture sshd;
+    test::GrabberRecording rec;
+    std::string tail;  //!< the end of the grabber's log, for failure messages
+
+    explicit HoppingRecording(const std::vector<std::string>& emulatorArgs)
+        : emu(withScenario(emulatorArgs), port, 60), sshd(emu.toolsDir())
+    {
+    }
+    static std::vector<std::string> withScenario(std::vector<std::string> args)
+    {
+        args.insert(args.begin(), {"--scenario", scenario("hopping")});
+        return args;
+    }
+    void record(std::map<std::string, std::string> keys, double seconds)
+    {
+        for (const auto& [k, v] : sshKeys(sshd)) keys.emplace(k, v);
+        keys["udp_port"] = std::to_string(port);
+        rec = test::runGrabber(
+            tmp, test::deriveGrabberIni("csi_channel_schedule.ini", keys, tmp.file("hop.ini")),
+            seconds);
+        tail = rec.log.substr(rec.log.size() > 6000 ? rec.log.size() - 6000 : 0);
+    }
+};
+
+TEST(GrabberEmulator, ChannelScheduleFromTheScansOfBothBands)
+{
+    // `channel_schedule = scan`: both radios scan (eth6 the 5 GHz band, eth5 the 2.4 GHz one),
+    // and the schedule is every channel heard, the capture's band first.
+    HoppingRecording hop({"--retune-delay", "0.05", "--scan-time", "0.2"});
+    ASSERT_TRUE(hop.emu.ready()) << hop.emu.log();
+    MRPT_WIFI_REQUIRE_SSHD(hop.sshd);
+    hop.record(
+        {{"channel", "42/80"},
+         {"channel_schedule", "scan"},
+         {"scan_period", "30"},
+         {"scan_wait", "0.3"},
+         {"channel_dwell_s", "0.4"},
+         {"rawlog_prefix", "scan"}},
+        4.0);
+    const auto& rec = hop.rec;
+    const auto& tail = hop.tail;
+    ASSERT_EQ(rec.exitCode, 0) << rec.log;
+    EXPECT_NE(rec.log.find("channel schedule from the scan: 42/80 155/80 6/20"), std::string::npos)
+        << tail;
+    std::set<unsigned> heard;
+    for (const auto& f : rec.frames) heard.insert(f->chanspec.centerChannel);
+    EXPECT_EQ(heard, (std::set<unsigned>{6, 42, 155})) << tail;
+    // The mean time without CSI per switch never exceeds the largest.
+    std::smatch m;
+    ASSERT_TRUE(
+        std::regex_search(rec.log, m, std::regex("per switch ([0-9]+) ms mean, ([0-9]+) ms max")))
+        << tail;
+    EXPECT_LE(std::stoi(m[1]), std::stoi(m[2])) << tail;
+}
+
 TEST(GrabberEmulator, ChannelScheduleRecordsEveryChannelAndCountsTheSwitches)
 {
     // share/scenarios/hopping.yaml: one AP on each of 42/80, 155/80 and 6/20. The grabber
     // visits the three channels in turn (channel_schedule), half a second each.
-    test::TempDir tmp;
-    const uint16_t port = test::freeLoopbackPort(SOCK_DGRAM);
     const double retuneDelay_s = 0.05;
-    test::EmulatorProcess emu(
-        {"--scenario", scenario("hopping"), "--retune-delay", std::to_string(retuneDelay_s)}, port,
-        60);
-    ASSERT_TRUE(emu.ready()) << emu.log();
-    test::SshdFixture sshd(emu.toolsDir());
-    MRPT_WIFI_REQUIRE_SSHD(sshd);
-    auto keys = sshKeys(sshd);
-    keys["udp_port"] = std::to_string(port);
-    keys["channel_schedule"] = "42/80 155/80 6/20";
-    keys["channel_dwell_s"] = "0.5";
-    keys["rawlog_prefix"] = "hop";
-    const auto rec = test::runGrabber(
-        tmp, test::deriveGrabberIni("csi_channel_schedule.ini", keys, tmp.file("hop.ini")), 5.0);
+    HoppingRecording hop({"--retune-delay", std::to_string(retuneDelay_s)});
+    ASSERT_TRUE(hop.emu.ready()) << hop.emu.log();
+    MRPT_WIFI_REQUIRE_SSHD(hop.sshd);
+    hop.record(
+        {{"channel_schedule", "42/80 155/80 6/20"},
+         {"channel_dwell_s", "0.5"},
+         {"rawlog_prefix", "hop"}},
+        5.0);
+    const auto& rec = hop.rec;
+    const auto& tail = hop.tail;
     ASSERT_EQ(rec.exitCode, 0) << rec.log;
-    const std::string tail = rec.log.substr(rec.log.size() > 6000 ? rec.log.size() - 6000 : 0);
 
     // Frames from every channel, each from the AP on that channel only.
     const std::map<unsigned, std::string> apOn = {
@@ -365,4 +424,37 @@ TEST(GrabberEmulator, ChannelScheduleRecordsEveryChannelAndCountsTheSwitches)
     EXPECT_LE(runs, size_t(visits)) << runs << " runs of frames on one channel";
     std::cout << rec.frames.size() << " frames: 6/20 " << perChannel[6] << ", 42/80 "
               << perChannel[42] << ", 155/80 " << perChannel[155] << "; " << m[0].str() << "\n";
+
+    // The recording as a user takes it on: one calibration per channel from the emulator's
+    // truth poses (on the receiver's clock), then bearings from every AP, each channel with
+    // its own file. A few seconds of hopping are a short calibration drive, hence --force;
+    // the accuracy of the files is CalibCli.EveryChannelOfAHoppingDriveCalibratedAndUsedAtOnce's.
+    std::string rawlog;
+    for (const auto& e : std::filesystem::directory_iterator(hop.tmp.path()))
+        if (e.path().extension() == ".rawlog") rawlog = e.path().string();
+    ASSERT_FALSE(rawlog.empty());
+    const std::string truth = hop.emu.stateDir() + "/truth", calib = hop.tmp.file("calib");
+    auto r = test::run(
+        test::binDir() + "/wifi-calibrate -q " + rawlog + " --array " + MRPT_WIFI_SOURCE_DIR +
+        "/share/arrays/rt-ac86u.yaml --transmitters " + truth + "/transmitters.yaml --poses " +
+        truth + "/trajectory_tum.txt --force --out " + calib);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const char* cs : {"42/80", "155/80", "6/20"})
+        EXPECT_TRUE(
+            std::regex_search(r.output, std::regex(std::string("\n  ") + cs + " +: written")))
+            << cs << "\n"
+            << r.output;
+    r = test::run(
+        test::binDir() + "/csi-bearings -q -a aoa_only --require-calib -c " + calib + " " + rawlog +
+        " " + hop.tmp.file("bearings.rawlog"));
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    for (const auto& [ch, mac] : apOn)
+    {
+        const auto at = r.output.find(mac);
+        ASSERT_NE(at, std::string::npos) << r.output;
+        std::istringstream row(r.output.substr(at + mac.size()));
+        uint64_t frames = 0, bearings = 0;
+        row >> frames >> bearings;
+        EXPECT_GT(bearings, frames / 2) << mac << "\n" << r.output;
+    }
 }

@@ -13,6 +13,10 @@
 #include <mrpt_wifi/sensor/CWiFiOdometryUdpSensor.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
 #include <thread>
 
 #include "TestSupport.h"
@@ -341,6 +345,38 @@ TEST(LiveLocalizer, OnceTheSmootherStopsItsLastOffsetStaysInTheSigma)
     EXPECT_NEAR(u.reported(0, 0), u.particles(0, 0) + distance2, 1e-9 + 1e-6 * distance2);
     EXPECT_NEAR(u.reported(1, 1), u.particles(1, 1) + distance2, 1e-9 + 1e-6 * distance2);
     EXPECT_DOUBLE_EQ(u.reported(0, 1), u.particles(0, 1));
+}
+
+TEST(LiveLagRecord, PercentilesOfEveryLagInMemoryBoundedByTheirRange)
+{
+    // wifi-localize's lag summary over a long run: the same p50 / p99 / max as all the lags
+    // kept and sorted (at the 0.1 ms it prints), while what is kept follows the lags' range
+    // (here 0..0.4 s: at most 4001 values of 0.1 ms), not their number.
+    localization::LagRecord record;
+    EXPECT_TRUE(std::isnan(record.percentile(0.5)));
+    std::vector<double> all;
+    std::mt19937 rng(56);
+    std::exponential_distribution<double> tail(1 / 0.01);
+    for (int i = 0; i < 300000; ++i)
+    {
+        const double lag = std::min(0.4, 0.003 + tail(rng));
+        all.push_back(lag);
+        record.add(lag);
+    }
+    EXPECT_EQ(record.count(), all.size());
+    EXPECT_LE(record.bins(), 4001u);
+    std::sort(all.begin(), all.end());
+    const auto printed = [](double s)
+    {
+        char b[32];
+        std::snprintf(b, sizeof(b), "%.1f", s * 1e3);
+        return std::string(b);
+    };
+    for (const double q : {0.0, 0.5, 0.9, 0.99, 1.0})
+    {
+        const size_t rank = std::min(all.size() - 1, size_t(q * double(all.size())));
+        EXPECT_EQ(printed(record.percentile(q)), printed(all[rank])) << "q = " << q;
+    }
 }
 
 TEST(LiveDeviceMapper, OffUnlessAskedAndBadOptionsNameTheKey)

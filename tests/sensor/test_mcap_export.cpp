@@ -5,11 +5,14 @@
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
+#include <mrpt_wifi/sensor/LocalizationMcap.h>
+#include <mrpt_wifi/sensor/McapReader.h>
 #include <mrpt_wifi/sensor/McapWriter.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -302,4 +305,66 @@ TEST(McapWriter, ManySmallChunksOutOfOrderAcrossChannels)
     const auto check = checkMcap(tmp.file("small.mcap"), tmp.file("small.json"));
     EXPECT_EQ(check.exitCode, 0) << check.output;
     EXPECT_NE(check.output.find("in 10 lz4 chunks"), std::string::npos) << check.output;
+}
+
+TEST(LocalizationMcap, LongRunPathIsThinnedEvenlyAndEndsAtTheLastPose)
+{
+    // An hour of live poses at 100/s must not all stay in memory for /path: it holds at most
+    // kMaxPathPoses, evenly spaced from the first pose, plus the last; /pose keeps every one.
+    const std::string file = test::tempPath(".mcap");
+    constexpr size_t kPoses = 25003;
+    {
+        ros2::LocalizationMcap out(file, false, mcap::Compression::None);
+        for (size_t i = 0; i < kPoses; ++i)
+            out.pose(1.7e9 + 0.01 * double(i), 0.001 * double(i), 0, 0);
+        out.close();
+    }
+    std::vector<uint64_t> stamps;  // /path's pose stamps in hundredths of a second
+    size_t posesOnPoseTopic = 0;
+    auto source = mcap::openFileSource(file);
+    mcap::readMcap(
+        *source,
+        [&](const mcap::MessageView& m)
+        {
+            posesOnPoseTopic += m.channel->topic == "/pose";
+            if (m.channel->topic != "/path") return;
+            // CDR (little endian, 4-byte encapsulation): Header{int32 sec, uint32 nanosec,
+            // string frame_id}, then sequence<PoseStamped>; doubles 8-aligned from the payload.
+            const uint8_t* p = m.data + 4;
+            const size_t n = m.size - 4;
+            size_t at = 0;
+            const auto u32 = [&]
+            {
+                at = (at + 3) & ~size_t(3);
+                uint32_t v;
+                std::memcpy(&v, p + at, 4);
+                at += 4;
+                return v;
+            };
+            const auto header = [&]
+            {
+                const uint32_t sec = u32(), nsec = u32();
+                at += u32();  // frame_id with its NUL
+                return uint64_t(sec) * 100 + uint64_t(std::llround(nsec * 1e-7));
+            };
+            header();
+            const uint32_t count = u32();
+            for (uint32_t k = 0; k < count; ++k)
+            {
+                stamps.push_back(header());
+                at = (at + 7) & ~size_t(7);
+                at += 7 * 8;  // position, orientation
+                ASSERT_LE(at, n);
+            }
+        });
+    EXPECT_EQ(posesOnPoseTopic, kPoses);
+    ASSERT_GT(stamps.size(), ros2::LocalizationMcap::kMaxPathPoses / 2);
+    ASSERT_LE(stamps.size(), ros2::LocalizationMcap::kMaxPathPoses + 1);
+    const uint64_t first = uint64_t(1700000000) * 100;
+    EXPECT_EQ(stamps.front(), first);
+    EXPECT_EQ(stamps.back(), first + kPoses - 1);
+    // Evenly spaced (one stride) up to the last pose.
+    const uint64_t stride = stamps[1] - stamps[0];
+    EXPECT_GE(stride, 2u);
+    for (size_t k = 1; k + 1 < stamps.size(); ++k) EXPECT_EQ(stamps[k] - stamps[k - 1], stride);
 }

@@ -7,6 +7,7 @@
 #include <mrpt/system/filesystem.h>
 #include <mrpt_wifi/sim/Simulator.h>
 
+#include <cmath>
 #include <fstream>
 #include <set>
 
@@ -197,9 +198,18 @@ TEST(Scenario, FromFileReportsTheFileName)
 // transmitter and odometry.
 TEST(Scenario, SampleScenariosLoadAndSimulate)
 {
-    const std::vector<std::string> names{"calibration", "bearing", "kidnapped",       "iot",
-                                         "loop",        "roaming", "calibration-2g4", "hopping",
-                                         "building"};
+    const std::vector<std::string> names{
+        "calibration",
+        "bearing",
+        "kidnapped",
+        "iot",
+        "loop",
+        "roaming",
+        "calibration-2g4",
+        "hopping",
+        "building",
+        "building-hopping",
+        "building-hopping-receiver"};
     for (const auto& name : names)
     {
         SCOPED_TRACE(name);
@@ -222,7 +232,14 @@ TEST(Scenario, SampleScenariosLoadAndSimulate)
             }
         }
         for (size_t i = 0; i < frames.size(); ++i)
-            EXPECT_NEAR(frames[i], 2.0 * sc.transmitters[i].frameRate_Hz, 1.0) << i;
+        {
+            // A hopping receiver hears each transmitter only while on its channel.
+            double listening_s = 0;
+            for (double t = 0.0005; t < 2.0; t += 0.001)
+                listening_s +=
+                    0.001 * (sc.receiver.nextListeningTime(sc.transmitters[i].chanspec, t) == t);
+            EXPECT_NEAR(frames[i], listening_s * sc.transmitters[i].frameRate_Hz, 1.0) << i;
+        }
         EXPECT_EQ(odometry, unsigned(2.0 * sc.odometry.rate_Hz) + 1);
     }
     // ... and nothing else is lying there untested.
@@ -299,4 +316,55 @@ TEST(Scenario, JumpStatesOfRealSizeFromListedDelays)
     EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.state_delays_ns");
     e = loadError(kValid + replaced(jumps, "[-20.9, -9.0, 4.1, 16.0]", "[]"));
     EXPECT_EQ(e.keyPath(), "impairments.antenna_jumps.state_delays_ns");
+}
+
+TEST(Scenario, ReceiverChannelScheduleKeysAndTheirErrors)
+{
+    const auto withSchedule = [](const std::string& keys)
+    { return replaced(kValid, "receiver:\n", "receiver:\n" + keys); };
+    const Scenario sc = Scenario::fromYamlText(
+        withSchedule("  channel_schedule: [155/80, 36/20]\n  channel_dwell_s: 0.5\n"
+                     "  channel_switch_ms: 50\n"),
+        "hop.yaml", kShare + "/scenarios");
+    ASSERT_EQ(sc.receiver.channelSchedule.size(), 2u);
+    EXPECT_TRUE(sc.receiver.channelSchedule[0].sameChannel(sc.transmitters[0].chanspec));
+    EXPECT_TRUE(sc.receiver.channelSchedule[1].sameChannel(sc.transmitters[1].chanspec));
+    EXPECT_DOUBLE_EQ(sc.receiver.channelDwell_s, 0.5);
+    EXPECT_DOUBLE_EQ(sc.receiver.channelSwitch_s, 0.05);
+    // Listening on 36/20 during [0.55, 1.05) of every 1.1 s cycle.
+    const Chanspec ch36 = sc.transmitters[1].chanspec;
+    EXPECT_DOUBLE_EQ(sc.receiver.nextListeningTime(ch36, 0.2), 0.55);
+    EXPECT_DOUBLE_EQ(sc.receiver.nextListeningTime(ch36, 0.7), 0.7);
+    EXPECT_DOUBLE_EQ(sc.receiver.nextListeningTime(ch36, 1.07), 1.65);
+    EXPECT_TRUE(std::isinf(sc.receiver.nextListeningTime(Chanspec::make(100, 20), 0.1)));
+    // Without the keys: every channel at once, the emulator's retune time as the default.
+    const Scenario plain = Scenario::fromYamlText(kValid, "plain.yaml", kShare + "/scenarios");
+    EXPECT_TRUE(plain.receiver.channelSchedule.empty());
+    EXPECT_DOUBLE_EQ(plain.receiver.channelSwitch_s, 0.020);
+    EXPECT_DOUBLE_EQ(plain.receiver.nextListeningTime(ch36, 0.2), 0.2);
+
+    struct Bad
+    {
+        std::string keys, keyPath, says;
+    };
+    for (const Bad& b : std::vector<Bad>{
+             {"  channel_schedule: [155/80, 100/20]\n", "receiver.channel_schedule[1]",
+              "no transmitter is on 100/20"},
+             {"  channel_schedule: [155/80, 155/80]\n", "receiver.channel_schedule[1]",
+              "already in the schedule"},
+             {"  channel_schedule: [155/8]\n", "receiver.channel_schedule[0]",
+              "impossible channel"},
+             {"  channel_schedule: []\n", "receiver.channel_schedule", "expected a list"},
+             {"  channel_schedule: [155/80]\n  channel_dwell_s: 0\n", "receiver.channel_dwell_s",
+              "must be > 0"},
+             {"  channel_schedule: [155/80]\n  channel_switch_ms: -5\n",
+              "receiver.channel_switch_ms", "must be >= 0"},
+         })
+    {
+        SCOPED_TRACE(b.keys);
+        const auto e = loadError(withSchedule(b.keys));
+        EXPECT_EQ(e.keyPath(), b.keyPath);
+        EXPECT_NE(std::string(e.what()).find(b.says), std::string::npos) << e.what();
+        EXPECT_GT(e.line(), 0);
+    }
 }

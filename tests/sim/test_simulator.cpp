@@ -11,6 +11,8 @@
 #include <cstring>
 #include <functional>
 #include <map>
+#include <set>
+#include <tuple>
 
 using namespace mrpt_wifi;
 using namespace mrpt_wifi::sim;
@@ -631,4 +633,53 @@ TEST(Simulator, RetriesAreFurtherReceptionsOfTheSameFrame)
             ASSERT_EQ(ev.frame.reception, 0u);
         }
     }
+}
+
+// A receiver with a channel schedule (issue 56.2) hears exactly the frames of the stream
+// without one that fall inside a listening window of their transmitter's channel: nothing from
+// another channel, nothing while it retunes, every channel in turn; odometry is unchanged.
+TEST(Simulator, ReceiverScheduleHearsOnlyTheChannelItIsOn)
+{
+    Scenario sc = baseScenario();
+    sc.impairments.retryProbability = 0.2;  // retries are heard (or not) like frames
+    Simulator everyChannel(sc);
+    sc.receiver.channelSchedule = {Chanspec::make(36, 20), Chanspec::make(155, 80)};
+    sc.receiver.channelDwell_s = 0.4;
+    sc.receiver.channelSwitch_s = 0.05;
+    Simulator hopping(sc);
+
+    const double slot = 0.45;
+    const auto listening = [&](size_t tx, double t)
+    {
+        const auto k = size_t(std::floor(t / slot));
+        return t - double(k) * slot < 0.4 &&
+               sc.receiver.channelSchedule[k % 2].sameChannel(sc.transmitters[tx].chanspec);
+    };
+    std::vector<std::tuple<size_t, uint64_t, unsigned, double>> expected, heard;
+    size_t odometryAll = 0, odometryHopping = 0;
+    for (const SimEvent& ev : runAll(everyChannel))
+        if (ev.kind == SimEvent::Kind::Odometry)
+            ++odometryAll;
+        else if (listening(ev.frame.transmitterIndex, ev.time_s))
+            expected.emplace_back(
+                ev.frame.transmitterIndex, ev.frame.frameIndex, ev.frame.reception, ev.time_s);
+    std::set<size_t> slotsWithFrames;
+    for (const SimEvent& ev : runAll(hopping))
+    {
+        if (ev.kind == SimEvent::Kind::Odometry)
+        {
+            ++odometryHopping;
+            continue;
+        }
+        const size_t tx = ev.frame.transmitterIndex;
+        EXPECT_TRUE(listening(tx, ev.time_s)) << "tx " << tx << " heard at " << ev.time_s;
+        EXPECT_EQ(ev.csi->chanspec.centerChannel, sc.transmitters[tx].chanspec.centerChannel);
+        heard.emplace_back(tx, ev.frame.frameIndex, ev.frame.reception, ev.time_s);
+        slotsWithFrames.insert(size_t(std::floor(ev.time_s / slot)));
+    }
+    EXPECT_EQ(heard, expected);
+    EXPECT_EQ(odometryHopping, odometryAll);
+    // 3 s: slots 0..6, both channels, every visit heard.
+    EXPECT_EQ(slotsWithFrames.size(), 7u);
+    EXPECT_GT(expected.size(), 100u);
 }

@@ -462,18 +462,24 @@ bool SyntheticApertureEstimator::estimate(
     const auto newestPose = ctx.antennaPoseAt(newest.timestamp);
     if (!newestPose) return fail("no pose at the newest frame");
 
+    // A robot that hops channels hears the peer on several carriers; an aperture is coherent
+    // on one, so it is formed from the frames on the newest frame's channel.
+    std::vector<const CleanCsi*> onChannel;
+    for (const auto* f : frames)
+        if (f->layout->centerFrequency_Hz == newest.layout->centerFrequency_Hz)
+            onChannel.push_back(f);
     std::vector<uint16_t> ca, cb;
-    for (const auto* f : frames) ca.push_back(f->frameCounter);
+    for (const auto* f : onChannel) ca.push_back(f->frameCounter);
     for (const auto* f : reverse) cb.push_back(f->frameCounter);
     exchanges_.clear();
     for (const auto& [i, j] : pairByCounter(unwrapCounter16(ca), unwrapCounter16(cb)))
     {
         const auto product =
-            combinedProduct(*frames[i], *reverse[j], opts_.moverChain, opts_.peerChain);
-        const auto pose = ctx.antennaPoseAt(frames[i]->timestamp);
+            combinedProduct(*onChannel[i], *reverse[j], opts_.moverChain, opts_.peerChain);
+        const auto pose = ctx.antennaPoseAt(onChannel[i]->timestamp);
         if (product && pose)
             exchanges_.push_back(
-                {mrpt::Clock::toDouble(frames[i]->timestamp), {pose->x, pose->y}, *product});
+                {mrpt::Clock::toDouble(onChannel[i]->timestamp), {pose->x, pose->y}, *product});
     }
     SarOptions options;
     options.carrier_Hz = newest.layout->centerFrequency_Hz;

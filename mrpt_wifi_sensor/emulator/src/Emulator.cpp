@@ -502,6 +502,7 @@ void Emulator::processScenarioFrame(CObservationWiFiCSI& obs, double t)
     if (opt_.device == EmulatedDevice::Esp32)
     {
         ++counters_.framesEmitted;
+        ++counters_.framesEmittedByTransmitter[obs.transmitter.asString()];
         if (serialLinesQueued_ >= opt_.maxDatagrams)
         {
             ++counters_.datagramsOverLimit;
@@ -533,6 +534,7 @@ void Emulator::processScenarioFrame(CObservationWiFiCSI& obs, double t)
         obs, opt_.device == EmulatedDevice::RaspberryPi ? nexmon::Chip::BCM43455c0
                                                         : nexmon::Chip::BCM4366c0);
     ++counters_.framesEmitted;
+    ++counters_.framesEmittedByTransmitter[obs.transmitter.asString()];
     for (auto& d : datagrams)
     {
         if (opt_.format == NexmonHeaderVariant::UbiLocate)
@@ -1036,6 +1038,9 @@ std::string Emulator::statusJson() const
         .uint("serial_lines_written", serial_ ? serial_->linesWritten() : 0)
         .uint("serial_lines_dropped", serial_ ? serial_->linesDropped() : 0)
         .num("max_lag_s", c.maxLag_s);
+    JsonObject perTransmitter;
+    for (const auto& [mac, n] : c.framesEmittedByTransmitter) perTransmitter.uint(mac, n);
+    dp.raw("frames_emitted_by_transmitter", perTransmitter.json());
     JsonObject root;
     root.raw("emulator", em.json())
         .raw("router", router_.toJson(now))

@@ -241,6 +241,14 @@ int main(int argc, char** argv)
                           << sc.receiver.array.size() << "  " << framesPerTx[i] << " frames\n";
                 frames += framesPerTx[i];
             }
+            if (const auto& hops = sc.receiver.channelSchedule; !hops.empty())
+            {
+                // What the frame counts above mean: each transmitter only while on its channel.
+                std::cout << "Receiver : channel schedule";
+                for (const auto& c : hops) std::cout << " " << c.asString();
+                std::cout << ", " << sc.receiver.channelDwell_s << " s each, "
+                          << sc.receiver.channelSwitch_s * 1e3 << " ms to switch\n";
+            }
             std::cout << "Trajectory: " << std::setprecision(4)
                       << simulator.trajectory().pathLength_m() << " m driven ("
                       << toString(sc.motion.type) << ")\n"

@@ -5,8 +5,10 @@
 #include <mrpt_wifi/obs/CObservationWiFiCSI.h>
 #include <mrpt_wifi/sim/Scenario.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -211,7 +213,8 @@ struct Reader
     {
         n.allowOnly(
             {"label", "array", "sensor_pose", "noise_figure_db", "antenna_gain_dbi", "chip_id",
-             "body_shadow", "csi_format"});
+             "body_shadow", "csi_format", "channel_schedule", "channel_dwell_s",
+             "channel_switch_ms"});
         ReceiverSpec r;
         r.sensorLabel = n.stringOr("label", r.sensorLabel);
         const std::string format = n.stringOr("csi_format", toString(r.csiFormat));
@@ -237,6 +240,14 @@ struct Reader
             r.bodyShadow.halfWidth_rad = 0.5 * b->doubleOr("width_deg", 90.0) * kDeg;
             r.bodyShadow.attenuation_dB = b->doubleOr("attenuation_db", 10.0);
         }
+        if (auto cs = n.get("channel_schedule"))
+        {
+            if (!cs->isSequence() || cs->size() == 0)
+                cs->fail("expected a list of channels, e.g. [42/80, 155/80, 6/20]");
+            for (size_t i = 0; i < cs->size(); ++i) r.channelSchedule.push_back(channel(cs->at(i)));
+        }
+        r.channelDwell_s = n.doubleOr("channel_dwell_s", r.channelDwell_s);
+        r.channelSwitch_s = n.doubleOr("channel_switch_ms", r.channelSwitch_s * 1e3) * 1e-3;
         return r;
     }
 
@@ -514,6 +525,25 @@ double ReceiverSpec::BodyShadow::loss_dB(double aoa_rad) const
     return attenuation_dB * 0.5 * (1 + std::cos(M_PI * (off - halfWidth_rad) / kEdge));
 }
 
+double ReceiverSpec::nextListeningTime(const Chanspec& cs, double t_s) const
+{
+    if (channelSchedule.empty()) return t_s;
+    const auto it = std::find_if(
+        channelSchedule.begin(), channelSchedule.end(),
+        [&](const Chanspec& c) { return c.sameChannel(cs); });
+    if (it == channelSchedule.end()) return std::numeric_limits<double>::infinity();
+    if (channelSchedule.size() == 1) return t_s;
+    // Slot k: listening on channel k during [k·L, k·L + dwell), then switching; L = dwell+switch.
+    const double slot = channelDwell_s + channelSwitch_s;
+    const double cycle = slot * double(channelSchedule.size());
+    const double opens = slot * double(it - channelSchedule.begin());
+    const double cycleStart = std::floor(t_s / cycle) * cycle;
+    const double within = t_s - cycleStart;
+    if (within < opens) return cycleStart + opens;
+    if (within < opens + channelDwell_s) return t_s;
+    return cycleStart + cycle + opens;
+}
+
 bool Scenario::insideRoom(const TPoint2D& p) const
 {
     if (roomCorners.size() < 3) return true;
@@ -615,6 +645,40 @@ void Scenario::validate() const
                     "transmitters[" + std::to_string(i) + "].streams",
                     "csi_format intel5300: at most 3 streams");
         }
+    }
+
+    const auto& schedule = receiver.channelSchedule;
+    for (size_t i = 0; i < schedule.size(); ++i)
+    {
+        const std::string key = "receiver.channel_schedule[" + std::to_string(i) + "]";
+        for (size_t j = 0; j < i; ++j)
+            if (schedule[j].sameChannel(schedule[i]))
+                fail(
+                    key, schedule[i].asString() + " is already in the schedule (entry " +
+                             std::to_string(j) + ")");
+        // A channel no transmitter uses only costs listening time: most likely a typo.
+        std::vector<Chanspec> used;
+        for (const auto& t : transmitters)
+            if (std::none_of(
+                    used.begin(), used.end(),
+                    [&](const Chanspec& c) { return c.sameChannel(t.chanspec); }))
+                used.push_back(t.chanspec);
+        if (std::none_of(
+                used.begin(), used.end(),
+                [&](const Chanspec& c) { return c.sameChannel(schedule[i]); }))
+        {
+            std::string list;
+            for (const auto& c : used) list += (list.empty() ? "" : ", ") + c.asString();
+            fail(
+                key, "no transmitter is on " + schedule[i].asString() + " (they use " + list + ")");
+        }
+    }
+    if (!schedule.empty())
+    {
+        if (!(receiver.channelDwell_s > 0 && receiver.channelDwell_s < 1e6))
+            fail("receiver.channel_dwell_s", "must be > 0 s");
+        if (!(receiver.channelSwitch_s >= 0 && receiver.channelSwitch_s < 1e3))
+            fail("receiver.channel_switch_ms", "must be >= 0 ms");
     }
 
     const auto& m = motion;

@@ -225,6 +225,24 @@ bool Simulator::hears(size_t tx) const
            cs.bandwidthMHz == channelFilter_->bandwidthMHz;
 }
 
+bool Simulator::heardAt(size_t tx, double t_s) const
+{
+    return sc_.receiver.nextListeningTime(sc_.transmitters[tx].chanspec, t_s) == t_s;
+}
+
+bool Simulator::skipToHeardFrame(size_t tx)
+{
+    auto& st = tx_[tx];
+    for (;;)
+    {
+        const double t = frameTime(tx, st.nextFrame);
+        const double opens = sc_.receiver.nextListeningTime(sc_.transmitters[tx].chanspec, t);
+        if (opens == t) return true;
+        if (!(opens <= sc_.duration_s)) return false;
+        st.nextFrame = firstFrameAtOrAfter(tx, opens);
+    }
+}
+
 double Simulator::retryDelay(size_t tx, uint64_t n) const
 {
     if (sc_.impairments.retryProbability <= 0) return -1;
@@ -243,13 +261,16 @@ bool Simulator::next(SimEvent& ev)
         best = odometry_[nextOdometry_].time_s;
         source = -1;
     }
+    const bool scheduled = followSchedule_ && !sc_.receiver.channelSchedule.empty();
     for (size_t i = 0; i < tx_.size(); ++i)
     {
         if (!hears(i)) continue;
         // A transmitter that was filtered out resumes at the stream's present, not its past.
         if (frameTime(i, tx_[i].nextFrame) < streamTime_)
             tx_[i].nextFrame = firstFrameAtOrAfter(i, streamTime_);
-        const double t = frameTime(i, tx_[i].nextFrame);
+        const double t = !scheduled || skipToHeardFrame(i)
+                             ? frameTime(i, tx_[i].nextFrame)
+                             : std::numeric_limits<double>::infinity();
         if (t < best)
         {
             best = t;
@@ -295,7 +316,8 @@ bool Simulator::next(SimEvent& ev)
     }
     const uint64_t n = st.nextFrame++;
     synthesizeFrame(size_t(source), n, *ev.csi, ev.frame);
-    if (const double d = retryDelay(size_t(source), n); d >= 0)
+    if (const double d = retryDelay(size_t(source), n);
+        d >= 0 && (!scheduled || heardAt(size_t(source), best + d)))
     {
         st.retryFrame = n;
         st.retryTime_s = best + d;

@@ -53,6 +53,10 @@ enum class ChainStatePolicy : uint8_t
     Always,  //!< whenever the recording showed states
     Never    //!< a state-unaware file
 };
+/** Two states of a chain whose phases at the centre frequency agree within this have the same
+ *  offsets (the muTrack RT-AC86Us' states agree within 0.4°). */
+constexpr double kSameStatePhase_rad = 3 * M_PI / 180;
+
 /** Parses "auto|on|off"; throws std::invalid_argument naming `what` otherwise. */
 ChainStatePolicy chainStatePolicyFromString(const std::string& s, const std::string& what);
 
@@ -65,7 +69,7 @@ ChainStatePolicy chainStatePolicyFromString(const std::string& s, const std::str
  *  would withhold bearings from those frames until each state is learnt again. Returns what
  *  was done, for the user (empty: nothing). */
 std::string applyChainStatePolicy(
-    PhaseCalibration& c, ChainStatePolicy policy, double maxPhase_rad = 3 * M_PI / 180);
+    PhaseCalibration& c, ChainStatePolicy policy, double maxPhase_rad = kSameStatePhase_rad);
 
 /** Preprocessing used for calibration: sub-band sign correction, STO/CFO removal and power
  *  normalisation on; no calibration applied; the firmware-overwritten subcarrier left out. */
@@ -159,6 +163,9 @@ struct CalibrationDiagnostics
     std::vector<ChainStateDiagnostics> chainStates;  //!< every state of every chain ≥ 1
     uint64_t chainStateChanges = 0;
     size_t unknownStateFrames = 0;  //!< frames left out: a chain's state not measurable
+    /** States within the tracker's tolerance of their chain's reference in delay and with its
+     *  phase: the reference seen through multipath, merged into it. */
+    size_t mergedChainStates = 0;
     size_t frames = 0, snapshots = 0, segments = 0;
     double duration_s = 0;
     unsigned bearingBins = 0;    //!< occupied bins of the expected-bearing histogram

@@ -199,6 +199,28 @@ private:
     uint64_t bearingsUsed_ = 0, bearingsWeighed_ = 0, unknown_ = 0;
 };
 
+/** The lag of every pose output of a live run (wifi-localize's summary: p50, p99, max), kept as
+ *  a count per 0.1 ms, the resolution the summary prints: memory follows the range of the lags,
+ *  not the length of the run, and each percentile is the printed value of the same rank among
+ *  all the lags (floor(q·n), the last one for q = 1). */
+class LagRecord
+{
+public:
+    static constexpr double kResolution_s = 1e-4;
+
+    void add(double lag_s);
+    uint64_t count() const { return count_; }
+    /** The lag of rank min(n − 1, floor(q·n)) in increasing order, to kResolution_s; NaN when
+     *  nothing was added. */
+    double percentile(double q) const;
+    /** Distinct 0.1 ms values held (what the record costs). */
+    size_t bins() const { return counts_.size(); }
+
+private:
+    std::map<long long, uint64_t> counts_;  //!< lag / kResolution_s, rounded -> how many
+    uint64_t count_ = 0;
+};
+
 /** Live device mapping: wifi-iot-map's machinery (raysFromBearings + triangulateDevice) on the
  *  AoA bearings and odometry seen so far. The inputs are kept exactly as readRawlog() would read
  *  them from a rawlog of the same observations (odometry sorted and strictly increasing in time,

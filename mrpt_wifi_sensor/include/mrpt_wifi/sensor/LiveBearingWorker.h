@@ -99,6 +99,8 @@ public:
     bool waitIdle(double timeout_s);
 
     Stats stats() const;
+    /** At most this many samples wait for takeLatency() (the newest). */
+    static constexpr size_t kMaxLatencySamples = 1u << 16;
     Latency takeLatency();
     std::vector<Message> takeMessages();
 

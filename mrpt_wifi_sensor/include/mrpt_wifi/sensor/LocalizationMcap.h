@@ -7,7 +7,8 @@
 //   /pose          geometry_msgs/msg/PoseWithCovarianceStamped (or PoseStamped without
 //                  covariance), one per estimate
 //   /tf            tf2_msgs/msg/TFMessage map -> base_link, the same pose (viewers follow it)
-//   /path          nav_msgs/msg/Path, the whole trajectory, once at the end
+//   /path          nav_msgs/msg/Path, the whole trajectory, once at the end (at most
+//                  kMaxPathPoses poses, evenly thinned on long runs: /pose has every one)
 //   /bearing_rays  visualization_msgs/msg/MarkerArray, one LINE_LIST per step (a segment per
 //                  bearing, from the receive array along the bearing)
 //   /transmitters, /devices  visualization_msgs/msg/MarkerArray: a SPHERE, a TEXT_VIEW_FACING
@@ -55,6 +56,10 @@ public:
     void bearingRays(double t, const std::vector<Ray>& rays);
     void transmitters(double t, const std::vector<Landmark>& list);
     void devices(double t, const std::vector<Landmark>& list);
+    /** Poses /path holds at most: a live run of hours (100 poses/s) would otherwise keep every
+     *  pose in memory to the end. Beyond it every other pose is dropped and the stride doubles,
+     *  so the path spans the whole run with evenly spaced poses and its last one. */
+    static constexpr size_t kMaxPathPoses = 10000;
     /** Writes /path (at the last pose's time) and closes the file; throws naming it on error. */
     void close();
 
@@ -75,7 +80,9 @@ private:
     {
         double t, x, y, phi;
     };
-    std::vector<Stamped> trajectory_;
+    std::vector<Stamped> trajectory_;  //!< every stride_-th pose, for /path
+    size_t stride_ = 1, posesSeen_ = 0;
+    Stamped last_{};  //!< the newest pose: /path always ends there
     bool closed_ = false;
 };
 

@@ -119,6 +119,9 @@ struct DataPlaneCounters
     uint64_t rewinds = 0;       //!< simulator restarts after channel / state changes
     uint64_t odometrySent = 0;  //!< odometry datagrams (odometryPort)
     double maxLag_s = 0;        //!< worst lateness of a send vs. its real-time schedule
+    /** Scenario frames emitted per transmitter (MAC as text): what each AP sent the receiver,
+     *  to compare with what it got. */
+    std::map<std::string, uint64_t> framesEmittedByTransmitter;
 };
 
 enum class StopReason : uint8_t

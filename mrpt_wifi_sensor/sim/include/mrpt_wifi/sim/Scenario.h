@@ -114,6 +114,19 @@ struct ReceiverSpec
         /** Loss [dB] of a ray arriving from `aoa_rad` (sensor frame). */
         double loss_dB(double aoa_rad) const;
     } bodyShadow;
+
+    /** Channel hopping, as CWiFiCSISensor's `channel_schedule`: from t = 0 the receiver
+     *  listens to channelSchedule[k] for channelDwell_s, then retunes for channelSwitch_s
+     *  (hears nothing), then takes the next channel, cyclically. It hears only transmitters on
+     *  the channel it listens to. Empty: every transmitter at once (no tuning modelled); one
+     *  channel: it stays there, no switch. */
+    std::vector<Chanspec> channelSchedule;
+    double channelDwell_s = 2.0;
+    double channelSwitch_s = 0.020;  //!< as rt-ac86u-emulator's --retune-delay default
+
+    /** Earliest time ≥ t_s at which the receiver listens to channel `cs` (t_s itself while it
+     *  does; +infinity if it never does). Without a schedule: t_s. */
+    double nextListeningTime(const Chanspec& cs, double t_s) const;
 };
 
 enum class MotionType : uint8_t

@@ -87,8 +87,14 @@ public:
     bool next(SimEvent& ev);
 
     /** Only transmitters on this channel (same centre channel and bandwidth) produce frames;
-     *  the others fall silent, as for a receiver tuned elsewhere. nullopt: all of them. */
-    void setChannelFilter(std::optional<Chanspec> cs) { channelFilter_ = cs; }
+     *  the others fall silent, as for a receiver tuned elsewhere. nullopt: all of them.
+     *  The caller then tunes the receiver (the emulator does, by router command): the
+     *  scenario's receiver channel schedule no longer applies, with or without a filter. */
+    void setChannelFilter(std::optional<Chanspec> cs)
+    {
+        channelFilter_ = cs;
+        followSchedule_ = false;
+    }
     const std::optional<Chanspec>& channelFilter() const { return channelFilter_; }
     /** Odometry events on/off (the emulator only needs CSI). */
     void setOdometryEnabled(bool enabled) { odometryEnabled_ = enabled; }
@@ -143,6 +149,11 @@ private:
 
     /** Whether the receiver, given the channel filter, hears transmitter tx. */
     bool hears(size_t tx) const;
+    /** With a receiver schedule: moves tx's next frame to the first one the receiver hears
+     *  (listening on its channel, not switching); false if none is left in the scenario. */
+    bool skipToHeardFrame(size_t tx);
+    /** Whether a frame of tx arriving at t_s is heard under the receiver schedule. */
+    bool heardAt(size_t tx, double t_s) const;
 
     Scenario sc_;
     ChannelModel channel_;
@@ -152,6 +163,7 @@ private:
     HardwareModel hardware_;
     CsiSynthesizer synthesizer_;
     std::optional<Chanspec> channelFilter_;
+    bool followSchedule_ = true;  //!< receiver.channelSchedule applies (no channel filter set)
     bool odometryEnabled_ = true;
     size_t nextOdometry_ = 0;
     double streamTime_ = 0;  //!< time of the last event returned by next()
