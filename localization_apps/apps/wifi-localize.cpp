@@ -1295,11 +1295,8 @@ int main(int argc, char** argv)
                             : " (without_odometry = false: it needs odometry)")
                     << ", " << fmt(loc.smoother().solveTime_s(), 2) << " s";
             sum << "\n";
-            // areaSummary()'s line, from the count kept while running.
-            if (const auto& a = loc.wifiMap().area())
-                sum << "  area           : x " << fmt(a->min.x) << ".." << fmt(a->max.x) << " y "
-                    << fmt(a->min.y) << ".." << fmt(a->max.y) << " m, " << outsideArea
-                    << " estimates outside it\n";
+            if (const auto area = areaSummary(loc.wifiMap(), outsideArea); !area.empty())
+                sum << "  area           : " << area << "\n";
             if (argGt.isSet() && !est.empty())
             {
                 const auto gt = Trajectory2D::fromTumFile(argGt.getValue());

@@ -141,10 +141,16 @@ std::string recoverySummary(const ParticleRecovery& r)
 std::string areaSummary(
     const CWiFiBearingMap& map, const std::vector<mrpt::math::TPose2D>& estimates)
 {
+    return areaSummary(
+        map, uint64_t(std::count_if(
+                 estimates.begin(), estimates.end(),
+                 [&](const auto& p) { return !map.inArea(p.x, p.y); })));
+}
+
+std::string areaSummary(const CWiFiBearingMap& map, uint64_t outside)
+{
     const auto& a = map.area();
     if (!a) return {};
-    const auto outside = std::count_if(
-        estimates.begin(), estimates.end(), [&](const auto& p) { return !map.inArea(p.x, p.y); });
     std::ostringstream o;
     o << std::fixed << std::setprecision(2) << "x " << a->min.x << ".." << a->max.x << " y "
       << a->min.y << ".." << a->max.y << " m, " << outside << " estimates outside it";

@@ -7,6 +7,7 @@
 #include <mrpt_wifi/localization/CWiFiBearingMap.h>
 #include <mrpt_wifi/obs/CObservationWiFiBearing.h>
 
+#include <cstdint>
 #include <deque>
 #include <optional>
 #include <string>
@@ -92,5 +93,7 @@ std::string recoverySummary(const ParticleRecovery& r);
  *  it"; empty when the map has no area. */
 std::string areaSummary(
     const CWiFiBearingMap& map, const std::vector<mrpt::math::TPose2D>& estimates);
+/** The same line from a count of estimates outside the area kept while running. */
+std::string areaSummary(const CWiFiBearingMap& map, uint64_t estimatesOutside);
 
 }  // namespace mrpt_wifi::localization
