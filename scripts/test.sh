@@ -36,8 +36,8 @@ seed_test_costs() {  # BUILD_DIR "NAME SECONDS" ...
 echo "== [1/3] Release build and all tests"
 if bash scripts/build.sh; then
   seed_test_costs build "LocalizationAccuracy.EvaluatesOneRoomEndToEnd 182" \
-    "LocalizationAccuracy.WithAodCalibratesEveryApAndUsesItsAod 153" \
-    "Docs.RobotGuideRunsOnTheEmulator 112" \
+    "LocalizationAccuracy.WithAodCalibratesEveryApAndUsesItsAod 72" \
+    "Docs.RobotGuideRunsOnTheEmulator 69" \
     "LocalizationAppsPf.WithoutOdometryWithinOneAndAHalfTimesTheOdometryError 28" \
     "WifiLocalize.UsesTheCsiSensorsOwnLiveBearings 25" "WifiLocalize.ReplayingACaptureGivesTheOfflineEstimate 25" \
     "WifiLocalize.LocalizesTheKidnappedRobotLiveFromTheEmulator 24" \

@@ -18,12 +18,15 @@ guide) in every .ini of the working folder before each block: the ssh port and k
 throw-away sshd on 127.0.0.1, the UDP ports, the CSI's source address (127.0.0.1, not Nexmon's
 10.10.10.10) and the bind address (loopback only).
 
-The emulator plays share/scenarios/kidnapped.yaml with its APs sending 10 frames per second
-(a real AP's beacon rate; the scenario's 100 would only make every step slower). The test fails
+The emulator plays share/scenarios/kidnapped.yaml with its APs sending --frame-rate frames per
+second (default 10, a real AP's beacon rate; the scenario's 100 would only make every step
+slower). ctest runs the robot guide at 20 (beacons and some traffic) with a 20 s drive: the same
+300+ frames per AP that the calibration needs, in half of the suite's wall time. The test fails
 when a block exits non-zero, a file the guide names (share/..., /usr/local/share/mrpt_wifi/...,
 or an output such as `pf/estimate_tum.txt`) is missing, or a placeholder is unknown.
 
 Usage: run_guide.py --source SRC --build BUILD [--guide docs/robot-guide.md] [--keep DIR]
+       [--drive-seconds 40] [--check-seconds 20] [--live-seconds 30] [--frame-rate 10]
 """
 import argparse
 import os
@@ -146,6 +149,7 @@ def main():
     ap.add_argument("--drive-seconds", type=int, default=40)
     ap.add_argument("--check-seconds", type=int, default=20)
     ap.add_argument("--live-seconds", type=int, default=30)
+    ap.add_argument("--frame-rate", type=int, default=10)
     args = ap.parse_args()
 
     src = os.path.abspath(args.source)
@@ -169,7 +173,7 @@ def main():
     # The emulated router: kidnapped.yaml with beacon-rate APs, arrays by absolute path.
     with open(os.path.join(share, "scenarios", "kidnapped.yaml"), encoding="utf-8") as f:
         scenario = f.read()
-    scenario = scenario.replace("frame_rate_hz: 100", "frame_rate_hz: 10")
+    scenario = scenario.replace("frame_rate_hz: 100", "frame_rate_hz: " + str(args.frame_rate))
     scenario = scenario.replace("../arrays/", os.path.join(share, "arrays") + "/")
     with open(os.path.join(work, "scenario.yaml"), "w", encoding="utf-8") as f:
         f.write(scenario)

@@ -473,7 +473,10 @@ TEST(Simulator, ChainOffsetsFollowTheirDelaysAcrossChannels)
         for (unsigned rx = 1; rx < 4; ++rx)
         {
             const double tau = hw.chainDelay_s(rx);
-            if (listed) EXPECT_EQ(tau, sc.impairments.chainDelays_s[rx]);
+            if (listed)
+            {
+                EXPECT_EQ(tau, sc.impairments.chainDelays_s[rx]);
+            }
             EXPECT_GT(std::abs(tau), 1e-12) << "chain " << rx;
             for (const char* other : {"42/80", "106/80", "6/20", "36/20"})
             {
