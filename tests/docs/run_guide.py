@@ -20,8 +20,8 @@ throw-away sshd on 127.0.0.1, the UDP ports, the CSI's source address (127.0.0.1
 
 The emulator plays share/scenarios/kidnapped.yaml with its APs sending --frame-rate frames per
 second (default 10, a real AP's beacon rate; the scenario's 100 would only make every step
-slower). ctest runs the robot guide at 20 (beacons and some traffic) with a 20 s drive: the same
-300+ frames per AP that the calibration needs, in half of the suite's wall time. The test fails
+slower). ctest runs the robot guide at 20 (beacons and some traffic) with a 20 s drive: the 300+
+frames per AP that the calibration needs, in about 70 s instead of 113 s. The test fails
 when a block exits non-zero, a file the guide names (share/..., /usr/local/share/mrpt_wifi/...,
 or an output such as `pf/estimate_tum.txt`) is missing, or a placeholder is unknown.
 
