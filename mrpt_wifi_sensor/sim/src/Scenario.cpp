@@ -648,6 +648,13 @@ void Scenario::validate() const
     }
 
     const auto& schedule = receiver.channelSchedule;
+    std::vector<Chanspec> used;  // the transmitters' channels, each once
+    if (!schedule.empty())
+        for (const auto& t : transmitters)
+            if (std::none_of(
+                    used.begin(), used.end(),
+                    [&](const Chanspec& c) { return c.sameChannel(t.chanspec); }))
+                used.push_back(t.chanspec);
     for (size_t i = 0; i < schedule.size(); ++i)
     {
         const std::string key = "receiver.channel_schedule[" + std::to_string(i) + "]";
@@ -657,12 +664,6 @@ void Scenario::validate() const
                     key, schedule[i].asString() + " is already in the schedule (entry " +
                              std::to_string(j) + ")");
         // A channel no transmitter uses only costs listening time: most likely a typo.
-        std::vector<Chanspec> used;
-        for (const auto& t : transmitters)
-            if (std::none_of(
-                    used.begin(), used.end(),
-                    [&](const Chanspec& c) { return c.sameChannel(t.chanspec); }))
-                used.push_back(t.chanspec);
         if (std::none_of(
                 used.begin(), used.end(),
                 [&](const Chanspec& c) { return c.sameChannel(schedule[i]); }))
